@@ -1,0 +1,138 @@
+//! The simulation: a `bevy_ecs` world holding the resources, and the two schedules.
+
+use crate::fields::{Fields, Params, Sample, SimTime, Timings};
+use crate::grid::Grid;
+use crate::init::add_initial;
+use crate::scene::Scene;
+use crate::schedule::{startup_schedule, step_schedule};
+use crate::spectral::Spectral;
+use crate::systems::diagnostics::Diagnostics;
+use crate::systems::transport::TransportScratch;
+use bevy_ecs::prelude::*;
+
+/// A running simulation.
+pub struct Simulation {
+    /// The ECS world: resources (grid, fields, solvers) and, later, body entities.
+    pub world: World,
+    /// The step schedule: add your own systems to it (see [`crate::schedule`]).
+    pub schedule: Schedule,
+    scene: Scene,
+}
+
+impl Simulation {
+    /// Set up the world for a validated scene: fields from the initial conditions, velocity
+    /// from the Poisson solve, first time step. Fails if the schedule cannot be built or the
+    /// initial state is not finite.
+    pub fn new(scene: Scene) -> anyhow::Result<Self> {
+        let grid = scene.grid();
+        let mut world = World::new();
+        let mut fields = Fields::new(&grid);
+        for init in &scene.initial {
+            add_initial(&grid, init, fields.omega_mut());
+        }
+        world.insert_resource(Params::from_scene(&scene));
+        world.insert_resource(fields);
+        world.insert_resource(Spectral::new(&grid));
+        world.insert_resource(TransportScratch::new(&grid));
+        world.insert_resource(Diagnostics::new(&grid, scene.numerics.end_time / 100.0));
+        world.insert_resource(SimTime {
+            stop_at: Some(scene.numerics.end_time),
+            ..Default::default()
+        });
+        world.insert_resource(Timings::default());
+        world.insert_resource(grid);
+        let mut startup = startup_schedule();
+        startup
+            .initialize(&mut world)
+            .map_err(|e| anyhow::anyhow!("the startup schedule cannot be built: {e:?}"))?;
+        startup.run(&mut world);
+        let mut schedule = step_schedule();
+        schedule
+            .initialize(&mut world)
+            .map_err(|e| anyhow::anyhow!("the step schedule cannot be built: {e:?}"))?;
+        let sim = Simulation {
+            world,
+            schedule,
+            scene,
+        };
+        if let Some(f) = sim.failure() {
+            anyhow::bail!("{f}");
+        }
+        Ok(sim)
+    }
+
+    /// Advance one step. On blow-up the error says what, where and when.
+    pub fn step(&mut self) -> anyhow::Result<()> {
+        self.schedule.run(&mut self.world);
+        match self.failure() {
+            Some(f) => Err(anyhow::anyhow!(f)),
+            None => Ok(()),
+        }
+    }
+
+    /// Step until `t_end` (landing on it exactly), calling `each` after every step.
+    pub fn run_until(
+        &mut self,
+        t_end: f64,
+        mut each: impl FnMut(&Simulation),
+    ) -> anyhow::Result<()> {
+        self.set_stop_at(Some(t_end));
+        while self.time() < t_end * (1.0 - 1e-12) {
+            self.step()?;
+            each(self);
+        }
+        Ok(())
+    }
+
+    /// Make the clock land exactly on `t` (an output or end time).
+    pub fn set_stop_at(&mut self, t: Option<f64>) {
+        let policy = self.world.resource::<Params>().dt_policy.clone();
+        let h = self.grid().h;
+        let diag = self.world.resource::<Diagnostics>();
+        let dt =
+            crate::systems::diagnostics::allowed_dt(&policy, &diag.sample, h, diag.dt_fallback);
+        let mut time = self.world.resource_mut::<SimTime>();
+        time.stop_at = t;
+        time.dt = crate::systems::diagnostics::land_on(time.t, dt, t);
+    }
+
+    /// Why the run must stop, if it must.
+    pub fn failure(&self) -> Option<String> {
+        self.world.resource::<Diagnostics>().failure.clone()
+    }
+
+    /// The scene being run.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Current time.
+    pub fn time(&self) -> f64 {
+        self.world.resource::<SimTime>().t
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.world.resource::<SimTime>().step
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &Grid {
+        self.world.resource::<Grid>()
+    }
+
+    /// The fields.
+    pub fn fields(&self) -> &Fields {
+        self.world.resource::<Fields>()
+    }
+
+    /// Global quantities after the last step.
+    pub fn sample(&self) -> Sample {
+        self.world.resource::<Diagnostics>().sample
+    }
+
+    /// Per-system time of the last step.
+    pub fn timings(&self) -> &Timings {
+        self.world.resource::<Timings>()
+    }
+}

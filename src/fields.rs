@@ -1,0 +1,172 @@
+//! The dense fluid fields and the small resources every system shares.
+//!
+//! Dense grids are resources, never entities: one `Vec<f64>` per component, indexed by
+//! [`Grid::idx`]. In 2D the vorticity is a scalar (one component) and the velocity has two.
+
+use crate::grid::Grid;
+use crate::scene::{Scene, TimeStep};
+use bevy_ecs::prelude::Resource;
+
+/// Vorticity and velocity on the grid.
+///
+/// The vorticity carries a version number that changes whenever it is handed out mutably, so
+/// that the spectral solver can reuse a transform it already holds (diffusion leaves ω̂ behind
+/// and the Poisson solve picks it up) and can never use a stale one.
+#[derive(Resource, Debug, Clone)]
+pub struct Fields {
+    omega: Vec<Vec<f64>>,
+    omega_version: u64,
+    /// Velocity, `grid.dim` components.
+    pub u: Vec<Vec<f64>>,
+    /// The velocity of the previous step (before the last Poisson solve).
+    pub u_prev: Vec<Vec<f64>>,
+    /// The step between `u_prev` and `u`; 0 until there is a previous velocity.
+    pub dt_prev: f64,
+}
+
+impl Fields {
+    /// Zero fields for `grid`.
+    pub fn new(grid: &Grid) -> Self {
+        Fields {
+            omega: vec![vec![0.0; grid.len()]; grid.omega_components()],
+            omega_version: 0,
+            u: vec![vec![0.0; grid.len()]; grid.dim],
+            u_prev: vec![vec![0.0; grid.len()]; grid.dim],
+            dt_prev: 0.0,
+        }
+    }
+
+    /// Vorticity components (1 in 2D, 3 in 3D).
+    pub fn omega(&self) -> &[Vec<f64>] {
+        &self.omega
+    }
+
+    /// Mutable vorticity; marks every cached transform of it stale.
+    pub fn omega_mut(&mut self) -> &mut [Vec<f64>] {
+        self.omega_version += 1;
+        &mut self.omega
+    }
+
+    /// The current vorticity version.
+    pub fn omega_version(&self) -> u64 {
+        self.omega_version
+    }
+
+    /// Start a new vorticity version and hand out vorticity and velocity together, for a solver
+    /// that records the returned version with whatever it caches.
+    pub fn next_version_parts(&mut self) -> (&mut [Vec<f64>], &mut [Vec<f64>], u64) {
+        self.omega_version += 1;
+        (&mut self.omega, &mut self.u, self.omega_version)
+    }
+
+    /// Vorticity and velocity together without starting a new version: only for a solver that
+    /// keeps its cache for the current version consistent with what it writes (the Poisson
+    /// solve, whose divergence cleaning is a projection it caches).
+    pub fn same_version_parts(&mut self) -> (&mut [Vec<f64>], &mut [Vec<f64>], u64) {
+        (&mut self.omega, &mut self.u, self.omega_version)
+    }
+}
+
+/// Physical and numerical parameters, fixed for a run.
+#[derive(Resource, Debug, Clone)]
+pub struct Params {
+    /// Kinematic viscosity ν.
+    pub nu: f64,
+    /// Fluid density ρ_F.
+    pub rho_fluid: f64,
+    /// Gravity.
+    pub gravity: [f64; 3],
+    /// Uniform background velocity (k = 0 mode).
+    pub background: [f64; 3],
+    /// Time-step policy.
+    pub dt_policy: TimeStep,
+    /// Particle creation cutoff relative to max|ω|.
+    pub remesh_cutoff: f64,
+    /// Blow-up threshold as a multiple of the initial max|ω|.
+    pub blowup_factor: f64,
+    /// Carry particles with the mid-step velocity extrapolated from the last two.
+    pub midpoint_velocity: bool,
+    /// Interpolation and remeshing kernel.
+    pub remesh_kernel: crate::scene::RemeshKernel,
+}
+
+impl Params {
+    /// Parameters of a (validated) scene.
+    pub fn from_scene(scene: &Scene) -> Self {
+        Params {
+            nu: scene.fluid.viscosity,
+            rho_fluid: scene.fluid.density,
+            gravity: scene.gravity(),
+            background: scene.background_velocity(),
+            dt_policy: scene.numerics.dt.clone(),
+            remesh_cutoff: scene.numerics.remesh_cutoff,
+            blowup_factor: scene.numerics.blowup_factor,
+            midpoint_velocity: scene.numerics.midpoint_velocity,
+            remesh_kernel: scene.numerics.remesh_kernel,
+        }
+    }
+}
+
+/// Simulated time.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct SimTime {
+    /// Current time.
+    pub t: f64,
+    /// The step the next schedule run takes (set by diagnostics at the end of each step).
+    pub dt: f64,
+    /// Steps taken.
+    pub step: u64,
+    /// The next time the step must land on exactly (an output time or the end), if any.
+    pub stop_at: Option<f64>,
+}
+
+/// Global diagnostics of the current state.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Sample {
+    /// Time.
+    pub t: f64,
+    /// The step that led here (0 at the start).
+    pub dt: f64,
+    /// Kinetic energy per unit volume, ½⟨|u|²⟩.
+    pub energy: f64,
+    /// Enstrophy per unit volume, ½⟨|ω|²⟩.
+    pub enstrophy: f64,
+    /// Circulation ∫ω dA in 2D; |∫ω dV| in 3D.
+    pub circulation: f64,
+    /// max|ω| over the grid.
+    pub max_omega: f64,
+    /// max|u| over the grid.
+    pub max_u: f64,
+}
+
+/// Per-system wall-clock time of the last step, seconds.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct Timings {
+    /// (system, seconds) for the last step, in schedule order.
+    pub last: Vec<(&'static str, f64)>,
+}
+
+impl Timings {
+    /// Record the time a system took in this step.
+    pub fn record(&mut self, name: &'static str, secs: f64) {
+        if let Some(e) = self.last.iter_mut().find(|e| e.0 == name) {
+            e.1 = secs;
+        } else {
+            self.last.push((name, secs));
+        }
+    }
+}
+
+/// Times a system from creation to drop.
+pub struct SystemTimer(std::time::Instant);
+
+impl SystemTimer {
+    /// Start timing.
+    pub fn start() -> Self {
+        SystemTimer(std::time::Instant::now())
+    }
+    /// Stop and record under `name`.
+    pub fn stop(self, timings: &mut Timings, name: &'static str) {
+        timings.record(name, self.0.elapsed().as_secs_f64());
+    }
+}

@@ -1,0 +1,286 @@
+//! The `tumble` command line.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use tumble::engine::Simulation;
+use tumble::output::peak_memory_bytes;
+use tumble::run::{RunOptions, run_scene};
+use tumble::scene::{Scene, SceneError};
+use tumble::validate::{CASES, run_case};
+
+#[derive(Parser)]
+#[command(
+    name = "tumble",
+    version,
+    about = "Incompressible viscous flow with colliding rigid bodies (vortex level set method)"
+)]
+struct Cli {
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene and write its outputs (series.csv, VTK snapshots with a .pvd, log).
+    Run {
+        /// The scene file (RON).
+        scene: PathBuf,
+        /// Output directory (default: runs/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// End time, overriding the scene's numerics.end_time.
+        #[arg(long)]
+        until: Option<f64>,
+        /// Replace the output directory if it exists.
+        #[arg(long)]
+        force: bool,
+        /// No progress output.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Load and validate a scene, print what it will compute, run nothing.
+    Check {
+        /// The scene file (RON).
+        scene: PathBuf,
+    },
+    /// Rerun the validation cases and compare with analytic and published values.
+    Validate {
+        /// Cases to run (default: all).
+        cases: Vec<String>,
+        /// Reduced resolution versions (as run in CI).
+        #[arg(long)]
+        quick: bool,
+    },
+    /// Time steps of a scene; prints one JSON line.
+    Bench {
+        /// The scene file (RON).
+        scene: PathBuf,
+        /// Timed steps.
+        #[arg(long, default_value_t = 10)]
+        steps: usize,
+        /// Untimed steps before timing.
+        #[arg(long, default_value_t = 2)]
+        warmup: usize,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    if let Some(n) = cli.threads {
+        if n == 0 {
+            eprintln!("error: --threads must be at least 1");
+            return ExitCode::from(2);
+        }
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+        {
+            eprintln!("error: cannot set up {n} threads: {e}");
+            return ExitCode::from(2);
+        }
+    }
+    match cli.command {
+        Command::Run {
+            scene,
+            out,
+            until,
+            force,
+            quiet,
+        } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            let opts = RunOptions {
+                out,
+                until,
+                force,
+                quiet,
+            };
+            match run_scene(scene, &opts) {
+                Ok(s) => {
+                    println!(
+                        "done: {} steps to t = {:.6} in {:.1} s; outputs in {}",
+                        s.steps,
+                        s.last.t,
+                        s.wall,
+                        s.dir.display()
+                    );
+                    println!(
+                        "  final energy {:.6e}, enstrophy {:.6e}, max|ω| {:.4e}",
+                        s.last.energy, s.last.enstrophy, s.last.max_omega
+                    );
+                    let steps = s.steps.max(1) as f64;
+                    let per: Vec<String> = s
+                        .system_seconds
+                        .iter()
+                        .map(|(n, t)| format!("{n} {:.4}", t / steps))
+                        .collect();
+                    println!("  seconds per step: {}", per.join(", "));
+                    println!("  open {} in ParaView", s.dir.join("fields.pvd").display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+        Command::Check { scene } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            let g = scene.grid();
+            println!("scene `{}` is valid", scene.name);
+            println!(
+                "  {}D periodic box, origin {:?}, extent {:?}",
+                g.dim,
+                &g.origin[..g.dim],
+                &g.extent()[..g.dim]
+            );
+            println!(
+                "  grid {} nodes (h = {}), {} vorticity component(s)",
+                g.n[..g.dim]
+                    .iter()
+                    .map(|n| n.to_string())
+                    .collect::<Vec<_>>()
+                    .join("x"),
+                g.h,
+                g.omega_components()
+            );
+            println!(
+                "  fluid: density {}, viscosity {}",
+                scene.fluid.density, scene.fluid.viscosity
+            );
+            println!(
+                "  time step {:?}, end time {}",
+                scene.numerics.dt, scene.numerics.end_time
+            );
+            println!("  initial vorticity: {} field(s)", scene.initial.len());
+            for i in &scene.initial {
+                println!("    {i:?}");
+            }
+            let mem = (g.len() * (2 * g.omega_components() + g.dim) * 8) as f64 / 1e6;
+            println!("  field memory about {mem:.0} MB (plus FFT buffers)");
+            ExitCode::SUCCESS
+        }
+        Command::Validate { cases, quick } => {
+            let cases: Vec<String> = if cases.is_empty() {
+                CASES.iter().map(|s| s.to_string()).collect()
+            } else {
+                cases
+            };
+            let mut failed = 0;
+            for case in &cases {
+                match run_case(case, quick) {
+                    Ok(rep) => {
+                        println!("{rep}");
+                        if !rep.passed() {
+                            failed += 1;
+                        }
+                    }
+                    Err(e) => {
+                        println!("== {case}\n  error: {e:#}\nFAIL {case}");
+                        failed += 1;
+                    }
+                }
+            }
+            println!("{} passed, {} failed", cases.len() - failed, failed);
+            if failed > 0 {
+                ExitCode::from(1)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Command::Bench {
+            scene,
+            steps,
+            warmup,
+        } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            match bench(scene, steps, warmup) {
+                Ok(line) => {
+                    println!("{line}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+    }
+}
+
+fn load(path: &std::path::Path) -> Result<Scene, ExitCode> {
+    Scene::load(path).map_err(|e: SceneError| {
+        eprintln!("error: {e}");
+        ExitCode::from(2)
+    })
+}
+
+fn median_p90(v: &mut [f64]) -> (f64, f64) {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        return (f64::NAN, f64::NAN);
+    }
+    let med = if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    };
+    let p90 = v[((0.9 * n as f64).ceil() as usize).clamp(1, n) - 1];
+    (med, p90)
+}
+
+fn bench(mut scene: Scene, steps: usize, warmup: usize) -> anyhow::Result<String> {
+    anyhow::ensure!(steps > 0, "--steps must be at least 1");
+    scene.numerics.end_time = f64::MAX / 4.0;
+    let name = scene.name.clone();
+    let mut sim = Simulation::new(scene)?;
+    sim.set_stop_at(None);
+    for _ in 0..warmup {
+        sim.step()?;
+    }
+    let mut total = Vec::with_capacity(steps);
+    let mut per: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    for _ in 0..steps {
+        let t0 = std::time::Instant::now();
+        sim.step()?;
+        total.push(t0.elapsed().as_secs_f64());
+        for &(n, s) in &sim.timings().last {
+            match per.iter_mut().find(|e| e.0 == n) {
+                Some(e) => e.1.push(s),
+                None => per.push((n, vec![s])),
+            }
+        }
+    }
+    let (med, p90) = median_p90(&mut total);
+    let mut systems = serde_json::Map::new();
+    for (n, mut v) in per {
+        systems.insert(n.to_string(), serde_json::json!(median_p90(&mut v).0));
+    }
+    let g = sim.grid();
+    let line = serde_json::json!({
+        "scene": name,
+        "cells": g.len(),
+        "grid": &g.n[..g.dim],
+        "bodies": 0,
+        "steps": steps,
+        "threads": rayon::current_num_threads(),
+        "median_s_per_step": med,
+        "p90_s_per_step": p90,
+        "median_s_per_system": systems,
+        "peak_memory_bytes": peak_memory_bytes(),
+    });
+    Ok(line.to_string())
+}

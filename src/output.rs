@@ -1,0 +1,625 @@
+//! Output: ParaView files (VTK XML ImageData `.vti` snapshots and a `.pvd` time series),
+//! CSV time series, and peak-memory reporting.
+//!
+//! Every file that must never be seen half-written (snapshots, the `.pvd` index) goes
+//! through [`atomic_write_with`]: it is written to a temporary file in the same directory,
+//! fsynced and renamed over the target, so a run killed at any moment leaves either the old
+//! or the new file, never a torn one. The `.pvd` is rewritten after each snapshot is
+//! complete, so it only ever lists complete snapshots.
+//!
+//! [`read_vti`] reads back exactly the format [`write_vti`] produces, so tests check the
+//! output rather than assume it.
+
+use std::fmt::Write as _;
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::grid::Grid;
+
+/// Buffer size for streamed output files.
+const BUF_BYTES: usize = 1 << 20;
+
+/// Distinguishes temporary files of concurrent atomic writes within one process.
+static TMP_SEQ: AtomicU64 = AtomicU64::new(0);
+
+fn invalid_input(msg: impl Into<String>) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, msg.into())
+}
+
+fn invalid_data(msg: impl Into<String>) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidData, msg.into())
+}
+
+/// Atomically replaces `path` with `bytes` (see [`atomic_write_with`]).
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    atomic_write_with(path, |w| w.write_all(bytes))
+}
+
+/// Atomically replaces `path` with whatever `f` writes.
+///
+/// `f` streams into a buffered temporary file `.{filename}.tmp-{pid}-{seq}` in the same
+/// directory as `path`; the file is then flushed, fsynced and renamed over `path` (and the
+/// directory fsynced, best effort). If `f` or any later step fails, the temporary file is
+/// removed and `path` is left untouched.
+pub fn atomic_write_with(
+    path: &Path,
+    f: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> io::Result<()> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| invalid_input(format!("no file name in {}", path.display())))?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let seq = TMP_SEQ.fetch_add(1, Ordering::Relaxed);
+    let tmp = dir.join(format!(
+        ".{}.tmp-{}-{}",
+        name.to_string_lossy(),
+        std::process::id(),
+        seq
+    ));
+
+    let result = (|| {
+        let file = File::create(&tmp)?;
+        let mut w = BufWriter::with_capacity(BUF_BYTES, file);
+        f(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        drop(file);
+        fs::rename(&tmp, path)
+    })();
+
+    match result {
+        Ok(()) => {
+            // Make the rename itself durable; not every platform/filesystem allows this.
+            if let Ok(d) = File::open(dir) {
+                let _ = d.sync_all();
+            }
+            Ok(())
+        }
+        Err(e) => {
+            let _ = fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+/// Formats an `f64` so that parsing it back gives exactly the same value: plain decimal for
+/// ordinary magnitudes, scientific notation for very large or very small ones.
+pub fn fmt_f64(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-5..1e16).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// Escapes the XML special characters of an attribute value.
+fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// Inverse of [`xml_escape`].
+fn xml_unescape(s: &str) -> String {
+    s.replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&quot;", "\"")
+        .replace("&apos;", "'")
+        .replace("&amp;", "&")
+}
+
+/// One named point field for [`write_vti`].
+///
+/// `components` holds 1 slice (a scalar), 2 (a 2D vector, written with z = 0 because
+/// ParaView wants 3-vectors) or 3 (a 3D vector), each of `grid.len()` values in the grid's
+/// flat order (x fastest).
+#[derive(Clone, Copy, Debug)]
+pub struct VtkField<'a> {
+    pub name: &'a str,
+    pub components: &'a [&'a [f64]],
+}
+
+/// Writes a VTK XML ImageData file (`.vti`) with the given point fields and the time as a
+/// `TIME` field-data value, atomically and streamed (raw little-endian appended data,
+/// `UInt64` headers).
+///
+/// Fails with `InvalidInput` if a field has 0 or more than 3 components or a component's
+/// length is not `grid.len()`.
+pub fn write_vti(path: &Path, grid: &Grid, time: f64, fields: &[VtkField]) -> io::Result<()> {
+    let npts = grid.len();
+    for f in fields {
+        let nc = f.components.len();
+        if !(1..=3).contains(&nc) {
+            return Err(invalid_input(format!(
+                "field {:?} has {nc} components (1, 2 or 3 allowed)",
+                f.name
+            )));
+        }
+        for (c, comp) in f.components.iter().enumerate() {
+            if comp.len() != npts {
+                return Err(invalid_input(format!(
+                    "field {:?} component {c} has {} values, grid has {npts} nodes",
+                    f.name,
+                    comp.len()
+                )));
+            }
+        }
+    }
+    let out_comps = |f: &VtkField| if f.components.len() == 1 { 1 } else { 3 };
+
+    let [nx, ny, nz] = grid.n;
+    let three_d = grid.dim == 3;
+    let ez = if three_d { nz.saturating_sub(1) } else { 0 };
+    let extent = format!(
+        "0 {} 0 {} 0 {}",
+        nx.saturating_sub(1),
+        ny.saturating_sub(1),
+        ez
+    );
+    let oz = if three_d { grid.origin[2] } else { 0.0 };
+    let h = fmt_f64(grid.h);
+
+    let mut head = String::new();
+    head.push_str("<?xml version=\"1.0\"?>\n");
+    head.push_str(
+        "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" \
+         header_type=\"UInt64\">\n",
+    );
+    let _ = writeln!(
+        head,
+        "  <ImageData WholeExtent=\"{extent}\" Origin=\"{} {} {}\" Spacing=\"{h} {h} {h}\">",
+        fmt_f64(grid.origin[0]),
+        fmt_f64(grid.origin[1]),
+        fmt_f64(oz)
+    );
+    head.push_str("    <FieldData>\n");
+    let _ = writeln!(
+        head,
+        "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" \
+         format=\"ascii\">{}</DataArray>",
+        fmt_f64(time)
+    );
+    head.push_str("    </FieldData>\n");
+    let _ = writeln!(head, "    <Piece Extent=\"{extent}\">");
+    head.push_str("      <PointData");
+    if let Some(f) = fields.iter().find(|f| out_comps(f) == 1) {
+        let _ = write!(head, " Scalars=\"{}\"", xml_escape(f.name));
+    }
+    if let Some(f) = fields.iter().find(|f| out_comps(f) == 3) {
+        let _ = write!(head, " Vectors=\"{}\"", xml_escape(f.name));
+    }
+    head.push_str(">\n");
+    let mut offset: u64 = 0;
+    for f in fields {
+        let nc = out_comps(f);
+        let _ = writeln!(
+            head,
+            "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{nc}\" \
+             format=\"appended\" offset=\"{offset}\"/>",
+            xml_escape(f.name)
+        );
+        offset += 8 + (npts * nc * 8) as u64;
+    }
+    head.push_str("      </PointData>\n");
+    head.push_str("      <CellData>\n      </CellData>\n");
+    head.push_str("    </Piece>\n");
+    head.push_str("  </ImageData>\n");
+    head.push_str("  <AppendedData encoding=\"raw\">\n   _");
+
+    atomic_write_with(path, |w| {
+        w.write_all(head.as_bytes())?;
+        // Values are staged in a small reusable chunk so the BufWriter sees few large writes.
+        let mut chunk: Vec<u8> = Vec::with_capacity(1 << 16);
+        for f in fields {
+            let nc = out_comps(f);
+            let bytes = (npts * nc * 8) as u64;
+            w.write_all(&bytes.to_le_bytes())?;
+            let comps = f.components;
+            for p in 0..npts {
+                match comps.len() {
+                    1 => chunk.extend_from_slice(&comps[0][p].to_le_bytes()),
+                    2 => {
+                        chunk.extend_from_slice(&comps[0][p].to_le_bytes());
+                        chunk.extend_from_slice(&comps[1][p].to_le_bytes());
+                        chunk.extend_from_slice(&0.0f64.to_le_bytes());
+                    }
+                    _ => {
+                        chunk.extend_from_slice(&comps[0][p].to_le_bytes());
+                        chunk.extend_from_slice(&comps[1][p].to_le_bytes());
+                        chunk.extend_from_slice(&comps[2][p].to_le_bytes());
+                    }
+                }
+                if chunk.len() + 24 > chunk.capacity() {
+                    w.write_all(&chunk)?;
+                    chunk.clear();
+                }
+            }
+            w.write_all(&chunk)?;
+            chunk.clear();
+        }
+        w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
+    })
+}
+
+/// What [`read_vti`] found in a `.vti` file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VtiData {
+    /// `x0 x1 y0 y1 z0 z1` (inclusive node ranges).
+    pub whole_extent: [usize; 6],
+    pub origin: [f64; 3],
+    pub spacing: [f64; 3],
+    /// The `TIME` field-data value, if present.
+    pub time: Option<f64>,
+    /// `(name, number of components, values)` per point array, in file order; values are
+    /// interleaved per point (x fastest), so `values.len() == points * components`.
+    pub arrays: Vec<(String, usize, Vec<f64>)>,
+}
+
+/// Splits the inside of a tag (`Name attr="v" ...`, without `<`/`>`) into its name and
+/// attributes (values unescaped).
+fn parse_tag(tag: &str) -> io::Result<(String, Vec<(String, String)>)> {
+    let tag = tag.trim().trim_end_matches('/').trim_end();
+    let (name, mut rest) = match tag.find(char::is_whitespace) {
+        Some(i) => (&tag[..i], &tag[i..]),
+        None => (tag, ""),
+    };
+    let mut attrs = Vec::new();
+    loop {
+        rest = rest.trim_start();
+        if rest.is_empty() {
+            break;
+        }
+        let eq = rest
+            .find('=')
+            .ok_or_else(|| invalid_data(format!("bad attribute in <{tag}>")))?;
+        let key = rest[..eq].trim().to_string();
+        let after = rest[eq + 1..].trim_start();
+        let quote = after
+            .chars()
+            .next()
+            .filter(|&c| c == '"' || c == '\'')
+            .ok_or_else(|| invalid_data(format!("unquoted attribute in <{tag}>")))?;
+        let body = &after[1..];
+        let end = body
+            .find(quote)
+            .ok_or_else(|| invalid_data(format!("unterminated attribute in <{tag}>")))?;
+        attrs.push((key, xml_unescape(&body[..end])));
+        rest = &body[end + 1..];
+    }
+    Ok((name.to_string(), attrs))
+}
+
+fn attr<'a>(attrs: &'a [(String, String)], key: &str) -> Option<&'a str> {
+    attrs
+        .iter()
+        .find(|(k, _)| k == key)
+        .map(|(_, v)| v.as_str())
+}
+
+fn need_attr<'a>(attrs: &'a [(String, String)], key: &str, tag: &str) -> io::Result<&'a str> {
+    attr(attrs, key).ok_or_else(|| invalid_data(format!("<{tag}> lacks {key}")))
+}
+
+fn parse_nums<T: std::str::FromStr, const N: usize>(s: &str, what: &str) -> io::Result<[T; N]> {
+    let v: Vec<T> = s
+        .split_whitespace()
+        .map(|t| t.parse::<T>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| invalid_data(format!("bad {what}: {s:?}")))?;
+    v.try_into()
+        .map_err(|_| invalid_data(format!("{what} needs {N} numbers: {s:?}")))
+}
+
+/// Reads a `.vti` file in exactly the format [`write_vti`] writes (Float64 arrays, raw
+/// appended data with `UInt64` little-endian headers, `TIME` as ascii field data).
+pub fn read_vti(path: &Path) -> io::Result<VtiData> {
+    let bytes = fs::read(path)?;
+    let marker = b"<AppendedData";
+    let app = bytes
+        .windows(marker.len())
+        .position(|w| w == marker)
+        .ok_or_else(|| invalid_data("no <AppendedData>"))?;
+    let tag_end = app
+        + bytes[app..]
+            .iter()
+            .position(|&b| b == b'>')
+            .ok_or_else(|| invalid_data("unterminated <AppendedData>"))?;
+    let (_, app_attrs) = parse_tag(
+        std::str::from_utf8(&bytes[app + 1..tag_end])
+            .map_err(|_| invalid_data("non-UTF-8 <AppendedData>"))?,
+    )?;
+    if attr(&app_attrs, "encoding") != Some("raw") {
+        return Err(invalid_data("AppendedData encoding is not raw"));
+    }
+    let underscore = tag_end
+        + bytes[tag_end..]
+            .iter()
+            .position(|&b| b == b'_')
+            .ok_or_else(|| invalid_data("no '_' starting the appended data"))?;
+    let data = &bytes[underscore + 1..];
+    let header =
+        std::str::from_utf8(&bytes[..app]).map_err(|_| invalid_data("non-UTF-8 XML header"))?;
+
+    let mut whole_extent = None;
+    let mut origin = None;
+    let mut spacing = None;
+    let mut time = None;
+    // (name, components, offset)
+    let mut specs: Vec<(String, usize, usize)> = Vec::new();
+    let mut in_point = false;
+    let mut in_field = false;
+
+    let mut rest = header;
+    while let Some(lt) = rest.find('<') {
+        let gt = rest[lt..]
+            .find('>')
+            .map(|g| lt + g)
+            .ok_or_else(|| invalid_data("unterminated tag"))?;
+        let inner = &rest[lt + 1..gt];
+        let after = &rest[gt + 1..];
+        rest = after;
+        if inner.starts_with('?') || inner.starts_with('!') {
+            continue;
+        }
+        if let Some(closing) = inner.strip_prefix('/') {
+            match closing.trim() {
+                "PointData" => in_point = false,
+                "FieldData" => in_field = false,
+                _ => {}
+            }
+            continue;
+        }
+        let self_closing = inner.trim_end().ends_with('/');
+        let (name, attrs) = parse_tag(inner)?;
+        match name.as_str() {
+            "VTKFile" => {
+                if attr(&attrs, "type") != Some("ImageData") {
+                    return Err(invalid_data("not an ImageData VTKFile"));
+                }
+                if attr(&attrs, "byte_order") != Some("LittleEndian") {
+                    return Err(invalid_data("byte_order is not LittleEndian"));
+                }
+                if attr(&attrs, "header_type") != Some("UInt64") {
+                    return Err(invalid_data("header_type is not UInt64"));
+                }
+            }
+            "ImageData" => {
+                whole_extent = Some(parse_nums::<usize, 6>(
+                    need_attr(&attrs, "WholeExtent", &name)?,
+                    "WholeExtent",
+                )?);
+                origin = Some(parse_nums::<f64, 3>(
+                    need_attr(&attrs, "Origin", &name)?,
+                    "Origin",
+                )?);
+                spacing = Some(parse_nums::<f64, 3>(
+                    need_attr(&attrs, "Spacing", &name)?,
+                    "Spacing",
+                )?);
+            }
+            "PointData" => in_point = !self_closing,
+            "FieldData" => in_field = !self_closing,
+            "DataArray" if in_point => {
+                let arr_name = need_attr(&attrs, "Name", &name)?.to_string();
+                if need_attr(&attrs, "type", &name)? != "Float64" {
+                    return Err(invalid_data(format!("array {arr_name:?} is not Float64")));
+                }
+                if need_attr(&attrs, "format", &name)? != "appended" {
+                    return Err(invalid_data(format!("array {arr_name:?} is not appended")));
+                }
+                let nc = match attr(&attrs, "NumberOfComponents") {
+                    Some(s) => s
+                        .trim()
+                        .parse::<usize>()
+                        .map_err(|_| invalid_data("bad NumberOfComponents"))?,
+                    None => 1,
+                };
+                let off = need_attr(&attrs, "offset", &name)?
+                    .trim()
+                    .parse::<usize>()
+                    .map_err(|_| invalid_data("bad offset"))?;
+                specs.push((arr_name, nc, off));
+            }
+            "DataArray" if in_field && attr(&attrs, "Name") == Some("TIME") => {
+                if self_closing {
+                    return Err(invalid_data("empty TIME array"));
+                }
+                let text_end = after
+                    .find('<')
+                    .ok_or_else(|| invalid_data("unterminated TIME array"))?;
+                let text = after[..text_end].trim();
+                let first = text
+                    .split_whitespace()
+                    .next()
+                    .ok_or_else(|| invalid_data("empty TIME array"))?;
+                time = Some(
+                    first
+                        .parse::<f64>()
+                        .map_err(|_| invalid_data(format!("bad TIME {first:?}")))?,
+                );
+            }
+            _ => {}
+        }
+    }
+
+    let whole_extent = whole_extent.ok_or_else(|| invalid_data("no <ImageData>"))?;
+    let origin = origin.ok_or_else(|| invalid_data("no Origin"))?;
+    let spacing = spacing.ok_or_else(|| invalid_data("no Spacing"))?;
+    let mut npts = 1usize;
+    for a in 0..3 {
+        let (lo, hi) = (whole_extent[2 * a], whole_extent[2 * a + 1]);
+        if hi < lo {
+            return Err(invalid_data("empty WholeExtent"));
+        }
+        npts *= hi - lo + 1;
+    }
+
+    let mut arrays = Vec::with_capacity(specs.len());
+    for (name, nc, off) in specs {
+        let head = data
+            .get(off..off + 8)
+            .ok_or_else(|| invalid_data(format!("array {name:?}: offset past end")))?;
+        let nbytes = u64::from_le_bytes(head.try_into().unwrap()) as usize;
+        if nbytes != npts * nc * 8 {
+            return Err(invalid_data(format!(
+                "array {name:?}: {nbytes} bytes, expected {}",
+                npts * nc * 8
+            )));
+        }
+        let raw = data
+            .get(off + 8..off + 8 + nbytes)
+            .ok_or_else(|| invalid_data(format!("array {name:?}: truncated")))?;
+        let values = raw
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        arrays.push((name, nc, values));
+    }
+
+    Ok(VtiData {
+        whole_extent,
+        origin,
+        spacing,
+        time,
+        arrays,
+    })
+}
+
+/// A ParaView `.pvd` collection indexing a time series of snapshot files.
+///
+/// Each [`push`](PvdSeries::push) rewrites the whole file atomically, so call it only after
+/// the snapshot it names has been written completely.
+#[derive(Clone, Debug)]
+pub struct PvdSeries {
+    path: PathBuf,
+    entries: Vec<(f64, String)>,
+}
+
+impl PvdSeries {
+    /// A series written to `path` (nothing is written until the first `push`).
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        PvdSeries {
+            path: path.into(),
+            entries: Vec::new(),
+        }
+    }
+
+    /// The `.pvd` file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// `(time, file name)` of every listed snapshot, in push order.
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
+    /// Adds a snapshot (`file_name` relative to the `.pvd`'s directory) and rewrites the
+    /// `.pvd` atomically. On failure the entry is not kept, so the in-memory list matches
+    /// the file on disk.
+    pub fn push(&mut self, time: f64, file_name: &str) -> io::Result<()> {
+        self.entries.push((time, file_name.to_string()));
+        let mut s = String::new();
+        s.push_str("<?xml version=\"1.0\"?>\n");
+        s.push_str(
+            "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\" \
+             header_type=\"UInt64\">\n",
+        );
+        s.push_str("  <Collection>\n");
+        for (t, f) in &self.entries {
+            let _ = writeln!(
+                s,
+                "    <DataSet timestep=\"{}\" part=\"0\" file=\"{}\"/>",
+                fmt_f64(*t),
+                xml_escape(f)
+            );
+        }
+        s.push_str("  </Collection>\n</VTKFile>\n");
+        let r = atomic_write(&self.path, s.as_bytes());
+        if r.is_err() {
+            self.entries.pop();
+        }
+        r
+    }
+}
+
+/// A CSV time series: a header line, then one row of numbers per call to
+/// [`row`](CsvWriter::row), flushed to the OS after every row.
+#[derive(Debug)]
+pub struct CsvWriter {
+    w: BufWriter<File>,
+    columns: usize,
+}
+
+impl CsvWriter {
+    /// Creates (truncates) `path` and writes the comma-separated `header`.
+    pub fn create(path: &Path, header: &[&str]) -> io::Result<Self> {
+        let file = File::create(path)?;
+        let mut w = BufWriter::with_capacity(1 << 16, file);
+        w.write_all(header.join(",").as_bytes())?;
+        w.write_all(b"\n")?;
+        w.flush()?;
+        Ok(CsvWriter {
+            w,
+            columns: header.len(),
+        })
+    }
+
+    /// Appends one row; values are written so that they parse back exactly. Fails with
+    /// `InvalidInput` if the number of values differs from the number of header columns.
+    pub fn row(&mut self, values: &[f64]) -> io::Result<()> {
+        if values.len() != self.columns {
+            return Err(invalid_input(format!(
+                "CSV row has {} values, header has {} columns",
+                values.len(),
+                self.columns
+            )));
+        }
+        let mut line = String::with_capacity(values.len() * 24);
+        for (i, v) in values.iter().enumerate() {
+            if i > 0 {
+                line.push(',');
+            }
+            line.push_str(&fmt_f64(*v));
+        }
+        line.push('\n');
+        self.w.write_all(line.as_bytes())?;
+        self.w.flush()
+    }
+
+    /// Flushes buffered output to the OS.
+    pub fn flush(&mut self) -> io::Result<()> {
+        self.w.flush()
+    }
+}
+
+/// Peak resident set size of this process (`VmHWM` in `/proc/self/status`), in bytes;
+/// `None` where that is unavailable (non-Linux).
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let mut it = line["VmHWM:".len()..].split_whitespace();
+    let value: u64 = it.next()?.parse().ok()?;
+    let mult = match it.next() {
+        Some("kB") | Some("KB") | Some("kb") => 1024,
+        Some("mB") | Some("MB") => 1024 * 1024,
+        Some("B") | None => 1,
+        _ => return None,
+    };
+    Some(value * mult)
+}

@@ -1,0 +1,245 @@
+//! `tumble run`: a scene from start to end with outputs, progress and timings.
+
+use crate::engine::Simulation;
+use crate::fields::Sample;
+use crate::output::{CsvWriter, PvdSeries, VtkField, atomic_write, write_vti};
+use crate::scene::{FieldName, Scene};
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of a run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Output directory (default: the scene's `output.dir`, else `runs/<name>`).
+    pub out: Option<PathBuf>,
+    /// End time overriding the scene's.
+    pub until: Option<f64>,
+    /// Replace an existing output directory.
+    pub force: bool,
+    /// No progress bar or progress lines.
+    pub quiet: bool,
+}
+
+/// What a finished run reports.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// Where the outputs are.
+    pub dir: PathBuf,
+    /// Steps taken.
+    pub steps: u64,
+    /// The final state.
+    pub last: Sample,
+    /// Total seconds per system, in schedule order.
+    pub system_seconds: Vec<(&'static str, f64)>,
+    /// Wall-clock seconds of the whole run.
+    pub wall: f64,
+}
+
+/// Resolve the output directory and make it (refusing to overwrite without `force`).
+pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> {
+    let dir = match (&opts.out, &scene.output.dir) {
+        (Some(d), _) => d.clone(),
+        (None, Some(d)) => PathBuf::from(d),
+        (None, None) => Path::new("runs").join(&scene.name),
+    };
+    if dir.exists() {
+        if !opts.force {
+            anyhow::bail!(
+                "the output directory {} exists; pass --force to replace it or --out to choose another",
+                dir.display()
+            );
+        }
+        std::fs::remove_dir_all(&dir)
+            .with_context(|| format!("cannot remove the old output directory {}", dir.display()))?;
+    }
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+    Ok(dir)
+}
+
+/// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
+pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+    if let Some(t) = opts.until {
+        anyhow::ensure!(
+            t.is_finite() && t > 0.0,
+            "--until must be a positive time, got {t}"
+        );
+        scene.numerics.end_time = t;
+    }
+    let dir = prepare_dir(&scene, opts)?;
+    let wall0 = Instant::now();
+    atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
+        .context("cannot write scene.ron")?;
+    let end = scene.numerics.end_time;
+    let every = scene.output.every;
+    let mut sim = Simulation::new(scene)?;
+    let grid = sim.grid().clone();
+    let mut log = Log::create(&dir.join("log.txt"))?;
+    log.line(&format!(
+        "tumble {} run of scene `{}`: {}D grid {}x{}x{} (h = {}), end time {end}, {} threads",
+        env!("CARGO_PKG_VERSION"),
+        sim.scene().name,
+        grid.dim,
+        grid.n[0],
+        grid.n[1],
+        grid.n[2],
+        grid.h,
+        rayon::current_num_threads()
+    ))?;
+    let mut series = CsvWriter::create(
+        &dir.join("series.csv"),
+        &["t", "dt", "energy", "enstrophy", "circulation", "max_omega"],
+    )
+    .context("cannot create series.csv")?;
+    let mut pvd = PvdSeries::new(dir.join("fields.pvd"));
+    let mut snapshot = 0usize;
+    write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
+    write_row(&mut series, &sim.sample())?;
+
+    let bar = progress_bar(opts.quiet);
+    let mut totals: Vec<(&'static str, f64)> = Vec::new();
+    let mut next_out = every.map(|e| e.min(end));
+    let mut last_tenth = 0u32;
+    let result: anyhow::Result<()> = (|| {
+        while sim.time() < end * (1.0 - 1e-12) {
+            let stop = next_out.map_or(end, |o| o.min(end));
+            sim.set_stop_at(Some(stop));
+            while sim.time() < stop * (1.0 - 1e-12) {
+                sim.step()?;
+                write_row(&mut series, &sim.sample())?;
+                for &(name, s) in &sim.timings().last {
+                    match totals.iter_mut().find(|e| e.0 == name) {
+                        Some(e) => e.1 += s,
+                        None => totals.push((name, s)),
+                    }
+                }
+                let frac = (sim.time() / end).clamp(0.0, 1.0);
+                let s = sim.sample();
+                bar.set_position((frac * 1000.0) as u64);
+                bar.set_message(format!(
+                    "step {} t = {:.4} dt = {:.2e} max|ω| = {:.3e}",
+                    sim.steps(),
+                    s.t,
+                    s.dt,
+                    s.max_omega
+                ));
+                let tenth = (frac * 10.0).floor() as u32;
+                if bar.is_hidden() && !opts.quiet && tenth > last_tenth {
+                    last_tenth = tenth;
+                    eprintln!(
+                        "  {:>3}%  step {}  t = {:.4}  max|ω| = {:.3e}  {:.1} s",
+                        tenth * 10,
+                        sim.steps(),
+                        s.t,
+                        s.max_omega,
+                        wall0.elapsed().as_secs_f64()
+                    );
+                }
+            }
+            if next_out.is_some_and(|o| sim.time() >= o * (1.0 - 1e-12))
+                || sim.time() >= end * (1.0 - 1e-12)
+            {
+                write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
+                if let Some(e) = every {
+                    next_out = next_out.map(|o| o + e);
+                }
+            }
+        }
+        Ok(())
+    })();
+    bar.finish_and_clear();
+    series.flush().context("cannot write series.csv")?;
+    let wall = wall0.elapsed().as_secs_f64();
+    let summary = RunSummary {
+        dir: dir.clone(),
+        steps: sim.steps(),
+        last: sim.sample(),
+        system_seconds: totals,
+        wall,
+    };
+    match &result {
+        Ok(()) => log.line(&format!(
+            "finished: {} steps to t = {}, {:.2} s wall",
+            summary.steps, summary.last.t, wall
+        ))?,
+        Err(e) => log.line(&format!("stopped: {e:#}"))?,
+    }
+    let mut timing_lines = String::from("system,seconds_total,seconds_per_step\n");
+    for (name, s) in &summary.system_seconds {
+        timing_lines.push_str(&format!(
+            "{name},{s:.6},{:.6}\n",
+            s / summary.steps.max(1) as f64
+        ));
+    }
+    atomic_write(&dir.join("timings.csv"), timing_lines.as_bytes())
+        .context("cannot write timings.csv")?;
+    result?;
+    Ok(summary)
+}
+
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30.cyan/blue} {percent:>3}% {msg} [eta {eta}]")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+fn write_row(series: &mut CsvWriter, s: &Sample) -> anyhow::Result<()> {
+    series
+        .row(&[s.t, s.dt, s.energy, s.enstrophy, s.circulation, s.max_omega])
+        .context("cannot write series.csv")
+}
+
+fn write_snapshot(
+    sim: &Simulation,
+    dir: &Path,
+    pvd: &mut PvdSeries,
+    snapshot: &mut usize,
+) -> anyhow::Result<()> {
+    let f = sim.fields();
+    let omega: Vec<&[f64]> = f.omega().iter().map(|c| c.as_slice()).collect();
+    let u: Vec<&[f64]> = f.u.iter().map(|c| c.as_slice()).collect();
+    let mut fields = Vec::new();
+    for name in &sim.scene().output.fields {
+        match name {
+            FieldName::Omega => fields.push(VtkField {
+                name: "omega",
+                components: &omega,
+            }),
+            FieldName::Velocity => fields.push(VtkField {
+                name: "velocity",
+                components: &u,
+            }),
+        }
+    }
+    let file = format!("fields_{:06}.vti", *snapshot);
+    write_vti(&dir.join(&file), sim.grid(), sim.time(), &fields)
+        .with_context(|| format!("cannot write {file}"))?;
+    pvd.push(sim.time(), &file)
+        .context("cannot write fields.pvd")?;
+    *snapshot += 1;
+    Ok(())
+}
+
+/// A plain text log in the run directory.
+struct Log(std::fs::File);
+
+impl Log {
+    fn create(path: &Path) -> anyhow::Result<Self> {
+        Ok(Log(std::fs::File::create(path).with_context(|| {
+            format!("cannot create {}", path.display())
+        })?))
+    }
+    fn line(&mut self, s: &str) -> anyhow::Result<()> {
+        use std::io::Write;
+        writeln!(self.0, "{s}").context("cannot write log.txt")
+    }
+}

@@ -1,0 +1,118 @@
+//! All scheduling in one place.
+//!
+//! One step of the method is one run of the [`Step`] schedule: the named [`PhysicsSet`]s,
+//! chained once in the order of the paper's splitting (DESIGN.md, "One time step"). `First`
+//! and `Last` are empty: they are where users hook their own systems. A new physics system is
+//! one file in `systems/` plus one `add_systems(.. .in_set(PhysicsSet::X))` line (or
+//! `.after(PhysicsSet::X).before(PhysicsSet::Y)` between two sets).
+//!
+//! The executor is single-threaded (the systems parallelise inside with rayon) and ambiguous
+//! ordering is an error: two systems that touch the same data must be ordered.
+
+use crate::systems::{diagnostics, diffusion, poisson, transport};
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
+
+/// The named stages of a step, in order. Sets without built-in systems yet are the places
+/// where the body physics plugs in.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PhysicsSet {
+    /// Empty: user systems that run before everything else.
+    First,
+    /// Sample body level sets on the grid (section 3.1).
+    LevelSets,
+    /// Characteristic functions and density (eq. 19).
+    Density,
+    /// Contact forces between bodies (eqs. 20-22).
+    Collision,
+    /// Rigid velocity of each body (eq. 7).
+    RigidVelocity,
+    /// Implicit penalization (eqs. 13, 27).
+    Penalization,
+    /// Baroclinic vorticity generation (eq. 28).
+    Baroclinic,
+    /// Particle push, stretching and remeshing (eqs. 29-30).
+    Transport,
+    /// Implicit diffusion.
+    Diffusion,
+    /// Velocity from vorticity (eq. 15).
+    Poisson,
+    /// Move the bodies.
+    RigidUpdate,
+    /// Clock, time step, global quantities, blow-up guard.
+    Diagnostics,
+    /// Empty: user systems that run after everything else.
+    Last,
+}
+
+impl PhysicsSet {
+    /// Every set, in schedule order.
+    pub const ALL: [PhysicsSet; 13] = [
+        PhysicsSet::First,
+        PhysicsSet::LevelSets,
+        PhysicsSet::Density,
+        PhysicsSet::Collision,
+        PhysicsSet::RigidVelocity,
+        PhysicsSet::Penalization,
+        PhysicsSet::Baroclinic,
+        PhysicsSet::Transport,
+        PhysicsSet::Diffusion,
+        PhysicsSet::Poisson,
+        PhysicsSet::RigidUpdate,
+        PhysicsSet::Diagnostics,
+        PhysicsSet::Last,
+    ];
+}
+
+/// Label of the schedule that advances the simulation by one step.
+#[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Step;
+
+/// Label of the schedule run once before the first step (velocity and first dt).
+#[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Startup;
+
+fn configured(label: impl ScheduleLabel) -> Schedule {
+    let mut s = Schedule::new(label);
+    s.set_executor(SingleThreadedExecutor::new());
+    s.set_build_settings(ScheduleBuildSettings {
+        ambiguity_detection: LogLevel::Error,
+        ..Default::default()
+    });
+    s
+}
+
+/// The step schedule with the built-in systems.
+pub fn step_schedule() -> Schedule {
+    let mut s = configured(Step);
+    s.configure_sets(
+        (
+            PhysicsSet::First,
+            PhysicsSet::LevelSets,
+            PhysicsSet::Density,
+            PhysicsSet::Collision,
+            PhysicsSet::RigidVelocity,
+            PhysicsSet::Penalization,
+            PhysicsSet::Baroclinic,
+            PhysicsSet::Transport,
+            PhysicsSet::Diffusion,
+            PhysicsSet::Poisson,
+            PhysicsSet::RigidUpdate,
+            PhysicsSet::Diagnostics,
+            PhysicsSet::Last,
+        )
+            .chain(),
+    );
+    s.add_systems(transport::transport.in_set(PhysicsSet::Transport));
+    s.add_systems(diffusion::diffusion.in_set(PhysicsSet::Diffusion));
+    s.add_systems(poisson::poisson.in_set(PhysicsSet::Poisson));
+    s.add_systems(diagnostics::diagnostics.in_set(PhysicsSet::Diagnostics));
+    s
+}
+
+/// The startup schedule: velocity from the initial vorticity, then the first time step.
+pub fn startup_schedule() -> Schedule {
+    let mut s = configured(Startup);
+    s.add_systems((poisson::poisson, diagnostics::diagnostics_init).chain());
+    s
+}

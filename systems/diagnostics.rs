@@ -1,0 +1,243 @@
+//! # diagnostics: time step, global quantities and the blow-up guard (paper section 4.2.2)
+//!
+//! Closes a step: advances the clock, measures the state and chooses the next step
+//!
+//!   Δt = min(C / max|ω|, Δt_max, CFL h / max|u|)
+//!
+//! (the paper's Δt = C / max|ω| keeps particles from crossing, dt |∇u| < 1), shortened to land
+//! exactly on the next output or end time. It records kinetic energy ½⟨|u|²⟩, enstrophy
+//! ½⟨|ω|²⟩ (both per unit volume), circulation and max|ω|, and stops the run with a message
+//! naming the quantity, the place and the step when a value is not finite, max|ω| grows beyond
+//! `blowup_factor` times its initial value, or a fixed step is far beyond the CFL limit.
+//!
+//! Sums are taken per grid row and then added in row order, so they do not depend on the
+//! number of threads.
+
+use crate::fields::{Fields, Params, Sample, SimTime, SystemTimer, Timings};
+use crate::grid::Grid;
+use crate::scene::TimeStep;
+use bevy_ecs::prelude::*;
+use rayon::prelude::*;
+
+/// Diagnostics state: the latest sample, the reference for the blow-up guard and, once the run
+/// must stop, why.
+#[derive(Resource, Debug, Clone)]
+pub struct Diagnostics {
+    /// The state after the last step.
+    pub sample: Sample,
+    /// max|ω| at the start (reference for the blow-up guard).
+    pub omega0: f64,
+    /// Set when the run must stop: what went wrong, where and when.
+    pub failure: Option<String>,
+    /// Fallback step when nothing else bounds dt (fluid at rest, no dt_max).
+    pub dt_fallback: f64,
+    rows: Vec<RowStats>,
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct RowStats {
+    u2: f64,
+    w2: f64,
+    wsum: [f64; 3],
+    wmax2: f64,
+    wmax_at: usize,
+    umax2: f64,
+    nan_at: Option<usize>,
+}
+
+impl Diagnostics {
+    /// Diagnostics for `grid`; `dt_fallback` is used when nothing else bounds the step.
+    pub fn new(grid: &Grid, dt_fallback: f64) -> Self {
+        Diagnostics {
+            sample: Sample::default(),
+            omega0: 0.0,
+            failure: None,
+            dt_fallback,
+            rows: vec![RowStats::default(); grid.n[1] * grid.n[2]],
+        }
+    }
+
+    /// Measure the fields; returns the sample and (first non-finite node, node of max|ω|).
+    pub fn measure(&mut self, grid: &Grid, fields: &Fields) -> (Sample, Option<usize>, usize) {
+        let nx = grid.n[0];
+        let omega = fields.omega();
+        let u = &fields.u;
+        self.rows.par_iter_mut().enumerate().for_each(|(r, st)| {
+            let mut s = RowStats::default();
+            for i in r * nx..(r + 1) * nx {
+                let mut u2 = 0.0;
+                for c in u {
+                    u2 += c[i] * c[i];
+                }
+                let mut w2 = 0.0;
+                for (c, comp) in omega.iter().enumerate() {
+                    w2 += comp[i] * comp[i];
+                    s.wsum[c] += comp[i];
+                }
+                if s.nan_at.is_none() && !(u2.is_finite() && w2.is_finite()) {
+                    s.nan_at = Some(i);
+                }
+                s.u2 += u2;
+                s.w2 += w2;
+                if w2 > s.wmax2 {
+                    s.wmax2 = w2;
+                    s.wmax_at = i;
+                }
+                s.umax2 = s.umax2.max(u2);
+            }
+            *st = s;
+        });
+        let mut tot = RowStats::default();
+        for s in &self.rows {
+            tot.u2 += s.u2;
+            tot.w2 += s.w2;
+            for c in 0..3 {
+                tot.wsum[c] += s.wsum[c];
+            }
+            if s.wmax2 > tot.wmax2 {
+                tot.wmax2 = s.wmax2;
+                tot.wmax_at = s.wmax_at;
+            }
+            tot.umax2 = tot.umax2.max(s.umax2);
+            if tot.nan_at.is_none() {
+                tot.nan_at = s.nan_at;
+            }
+        }
+        let n = grid.len() as f64;
+        let dv = grid.cell_volume();
+        let circulation = if grid.dim == 2 {
+            tot.wsum[0] * dv
+        } else {
+            (tot.wsum[0].powi(2) + tot.wsum[1].powi(2) + tot.wsum[2].powi(2)).sqrt() * dv
+        };
+        let sample = Sample {
+            t: 0.0,
+            dt: 0.0,
+            energy: 0.5 * tot.u2 / n,
+            enstrophy: 0.5 * tot.w2 / n,
+            circulation,
+            max_omega: tot.wmax2.sqrt(),
+            max_u: tot.umax2.sqrt(),
+        };
+        (sample, tot.nan_at, tot.wmax_at)
+    }
+}
+
+/// The step the policy allows for this state, before landing on the next stop time.
+pub fn allowed_dt(policy: &TimeStep, sample: &Sample, h: f64, fallback: f64) -> f64 {
+    match *policy {
+        TimeStep::Fixed(dt) => dt,
+        TimeStep::Adaptive { c, dt_max, cfl } => {
+            let mut dt = f64::INFINITY;
+            if sample.max_omega > 0.0 {
+                dt = dt.min(c / sample.max_omega);
+            }
+            if let Some(m) = dt_max {
+                dt = dt.min(m);
+            }
+            if sample.max_u > 0.0 {
+                dt = dt.min(cfl * h / sample.max_u);
+            }
+            if dt.is_finite() { dt } else { fallback }
+        }
+    }
+}
+
+/// Shorten `dt` so that the clock lands exactly on `stop_at`, without leaving a sliver.
+pub fn land_on(t: f64, dt: f64, stop_at: Option<f64>) -> f64 {
+    match stop_at {
+        Some(stop) if stop > t => {
+            let rest = stop - t;
+            if rest <= dt * (1.0 + 1e-12) {
+                rest
+            } else if rest < 2.0 * dt {
+                0.5 * rest
+            } else {
+                dt
+            }
+        }
+        _ => dt,
+    }
+}
+
+fn place(grid: &Grid, idx: usize) -> String {
+    let [nx, ny, _] = grid.n;
+    let (i, j, k) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
+    let p = grid.pos(i, j, k);
+    if grid.dim == 2 {
+        format!("node ({i}, {j}) at x = ({:.4}, {:.4})", p[0], p[1])
+    } else {
+        format!(
+            "node ({i}, {j}, {k}) at x = ({:.4}, {:.4}, {:.4})",
+            p[0], p[1], p[2]
+        )
+    }
+}
+
+/// Measure the initial state and choose the first step (run once before the first step).
+pub fn diagnostics_init(
+    grid: Res<Grid>,
+    params: Res<Params>,
+    fields: Res<Fields>,
+    mut time: ResMut<SimTime>,
+    mut diag: ResMut<Diagnostics>,
+) {
+    let (mut s, nan_at, _) = diag.measure(&grid, &fields);
+    s.t = time.t;
+    diag.omega0 = s.max_omega;
+    if let Some(i) = nan_at {
+        diag.failure = Some(format!(
+            "the initial fields are not finite at {}",
+            place(&grid, i)
+        ));
+    }
+    diag.sample = s;
+    let dt = allowed_dt(&params.dt_policy, &s, grid.h, diag.dt_fallback);
+    time.dt = land_on(time.t, dt, time.stop_at);
+}
+
+/// The diagnostics system: closes the step.
+pub fn diagnostics(
+    grid: Res<Grid>,
+    params: Res<Params>,
+    fields: Res<Fields>,
+    mut time: ResMut<SimTime>,
+    mut diag: ResMut<Diagnostics>,
+    mut timings: ResMut<Timings>,
+) {
+    let timer = SystemTimer::start();
+    time.t += time.dt;
+    time.step += 1;
+    let (mut s, nan_at, wmax_at) = diag.measure(&grid, &fields);
+    s.t = time.t;
+    s.dt = time.dt;
+    let step = time.step;
+    if let Some(i) = nan_at {
+        diag.failure = Some(format!(
+            "blow-up: the velocity or vorticity is not finite at {} after step {step} (t = {:.6})",
+            place(&grid, i),
+            time.t
+        ));
+    } else if diag.omega0 > 0.0 && s.max_omega > params.blowup_factor * diag.omega0 {
+        diag.failure = Some(format!(
+            "blow-up: max|ω| = {:.4e} at {} after step {step} (t = {:.6}) exceeds {} times its initial value {:.4e}; reduce the time step (numerics.dt) or refine the grid",
+            s.max_omega,
+            place(&grid, wmax_at),
+            time.t,
+            params.blowup_factor,
+            diag.omega0
+        ));
+    } else if let TimeStep::Fixed(dt) = params.dt_policy
+        && s.max_u * dt / grid.h > 20.0
+    {
+        diag.failure = Some(format!(
+            "blow-up: max|u| dt / h = {:.1} after step {step} (t = {:.6}), far beyond the CFL limit; use a smaller fixed dt or an Adaptive step",
+            s.max_u * dt / grid.h,
+            time.t
+        ));
+    }
+    diag.sample = s;
+    let dt = allowed_dt(&params.dt_policy, &s, grid.h, diag.dt_fallback);
+    time.dt = land_on(time.t, dt, time.stop_at);
+    timer.stop(&mut timings, "diagnostics");
+}

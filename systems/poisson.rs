@@ -1,0 +1,29 @@
+//! # poisson: velocity from vorticity (paper eq. 15, section 3.2)
+//!
+//! Solves Δψ = -ω and u = ∇×ψ (so ∇·u = 0 and ∇×u = ω) with real FFTs in the periodic box.
+//! Derivatives are spectral, so a band-limited vorticity gives the exact velocity. In 3D the
+//! vorticity is first made divergence-free (ω̂ ← ω̂ - k (k·ω̂)/|k|²) unless the diffusion
+//! system already did so for the same vorticity. The mean (k = 0) velocity is the scene's
+//! uniform background velocity. The velocity it replaces is kept as the previous velocity
+//! (for the mid-step extrapolation in transport and for ∂u/∂t in the baroclinic term).
+
+use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::spectral::Spectral;
+use bevy_ecs::prelude::*;
+
+/// The Poisson system.
+pub fn poisson(
+    params: Res<Params>,
+    time: Res<SimTime>,
+    mut fields: ResMut<Fields>,
+    mut spectral: ResMut<Spectral>,
+    mut timings: ResMut<Timings>,
+) {
+    let timer = SystemTimer::start();
+    let fields = &mut *fields;
+    std::mem::swap(&mut fields.u, &mut fields.u_prev);
+    fields.dt_prev = time.dt;
+    let (omega, u, version) = fields.same_version_parts();
+    spectral.velocity(omega, version, params.background, u);
+    timer.stop(&mut timings, "poisson");
+}

@@ -1,0 +1,176 @@
+//! The command line as a user meets it.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn tumble() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tumble"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tumble-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const SCENE: &str = r#"Scene(
+    name: "tiny",
+    domain: (extent: [1.0, 1.0], cells: [32, 32]),
+    fluid: (viscosity: 0.001),
+    numerics: (end_time: 0.2),
+    initial: [LambOseen(center: [0.5, 0.5], circulation: 1.0, core_radius: 0.1)],
+    output: (every: 0.1),
+)"#;
+
+#[test]
+fn run_writes_outputs_and_refuses_to_overwrite() {
+    let d = tmp("run");
+    let scene = d.join("tiny.ron");
+    std::fs::write(&scene, SCENE).unwrap();
+    let out = d.join("out");
+    let st = tumble()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    for f in [
+        "scene.ron",
+        "series.csv",
+        "fields.pvd",
+        "log.txt",
+        "timings.csv",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    // Snapshots at t = 0, 0.1, 0.2, each readable, with the time it claims.
+    let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+    let last = tumble::output::read_vti(&out.join("fields_000002.vti")).unwrap();
+    assert!((last.time.unwrap() - 0.2).abs() < 1e-12);
+    assert_eq!(last.whole_extent, [0, 31, 0, 31, 0, 0]);
+    // The series ends at the end time.
+    let series = std::fs::read_to_string(out.join("series.csv")).unwrap();
+    let last_t: f64 = series
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((last_t - 0.2).abs() < 1e-12);
+    // A second run into the same directory is refused without --force...
+    let st = tumble()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    assert!(String::from_utf8_lossy(&st.stderr).contains("--force"));
+    // ...and allowed with it.
+    let st = tumble()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--force",
+            "--until",
+            "0.05",
+        ])
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn bad_scene_exits_2_and_names_the_line() {
+    let d = tmp("bad");
+    let scene = d.join("bad.ron");
+    std::fs::write(&scene, SCENE.replace("viscosity: 0.001", "viscosity: -1.0")).unwrap();
+    let st = tumble()
+        .args(["check", scene.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(st.status.code(), Some(2));
+    let msg = String::from_utf8_lossy(&st.stderr);
+    assert!(
+        msg.contains("line 4") && msg.contains("fluid.viscosity"),
+        "{msg}"
+    );
+    let st = tumble()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            d.join("o").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(st.status.code(), Some(2));
+    assert!(!d.join("o").exists(), "nothing is written for a bad scene");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn check_summarises_a_good_scene() {
+    let d = tmp("check");
+    let scene = d.join("tiny.ron");
+    std::fs::write(&scene, SCENE).unwrap();
+    let st = tumble()
+        .args(["check", scene.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let out = String::from_utf8_lossy(&st.stdout);
+    assert!(out.contains("32x32"), "{out}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn bench_prints_one_json_line() {
+    let d = tmp("bench");
+    let scene = d.join("tiny.ron");
+    std::fs::write(&scene, SCENE).unwrap();
+    let st = tumble()
+        .args(["bench", scene.to_str().unwrap(), "--steps", "3"])
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let out = String::from_utf8_lossy(&st.stdout);
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(v["cells"], 1024);
+    assert_eq!(v["steps"], 3);
+    assert!(v["median_s_per_step"].as_f64().unwrap() > 0.0);
+    assert!(v["median_s_per_system"]["transport"].as_f64().is_some());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn validate_unknown_case_fails() {
+    let st = tumble()
+        .args(["validate", "nope", "--quick"])
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+}

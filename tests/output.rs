@@ -1,0 +1,326 @@
+//! Output files are read back and checked, not assumed.
+
+use std::fs;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use tumble::grid::Grid;
+use tumble::output::{
+    CsvWriter, PvdSeries, VtkField, atomic_write, atomic_write_with, peak_memory_bytes, read_vti,
+    write_vti,
+};
+
+/// A fresh, empty scratch directory unique to this process and test; removed on drop.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(test: &str) -> Self {
+        let dir =
+            std::env::temp_dir().join(format!("tumble-output-{}-{}", std::process::id(), test));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+    fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Names of the files in `dir` that look like leftover temporaries.
+fn temp_files(dir: &Path) -> Vec<String> {
+    fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp-"))
+        .collect()
+}
+
+fn field(grid: &Grid, f: impl Fn([usize; 3]) -> f64) -> Vec<f64> {
+    let mut v = vec![0.0; grid.len()];
+    for k in 0..grid.n[2] {
+        for j in 0..grid.n[1] {
+            for i in 0..grid.n[0] {
+                v[grid.idx(i, j, k)] = f([i, j, k]);
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn vti_3d_round_trip() {
+    let s = Scratch::new("vti3d");
+    let grid = Grid::new([5, 4, 3], 0.125, [-1.5, 0.25, 3.0]);
+    // Values that do not survive a decimal text round trip unless written exactly.
+    let p = field(&grid, |[i, j, k]| {
+        (i as f64 + 0.1) * (j as f64 + 1.0 / 3.0) - k as f64
+    });
+    let ux = field(&grid, |[i, j, k]| (i + 10 * j + 100 * k) as f64 * 0.1);
+    let uy = field(&grid, |[i, _, _]| (i as f64).sin());
+    let uz = field(&grid, |[_, _, k]| -1e-300 * k as f64);
+    let time = 0.1 + 0.2;
+    let path = s.path().join("snap_000001.vti");
+    write_vti(
+        &path,
+        &grid,
+        time,
+        &[
+            VtkField {
+                name: "pressure",
+                components: &[&p],
+            },
+            VtkField {
+                name: "velocity",
+                components: &[&ux, &uy, &uz],
+            },
+        ],
+    )
+    .unwrap();
+
+    let text = fs::read(&path).unwrap();
+    assert!(text.starts_with(b"<?xml") || text.starts_with(b"<VTKFile"));
+    let head = String::from_utf8_lossy(&text[..text.len().min(2000)]);
+    for needle in [
+        "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" \
+         header_type=\"UInt64\">",
+        "<ImageData WholeExtent=\"0 4 0 3 0 2\"",
+        "<Piece Extent=\"0 4 0 3 0 2\">",
+        "<PointData",
+        "Name=\"pressure\" NumberOfComponents=\"1\" format=\"appended\" offset=\"0\"",
+        "Name=\"velocity\" NumberOfComponents=\"3\" format=\"appended\"",
+        "<FieldData>",
+        "Name=\"TIME\"",
+        "<AppendedData encoding=\"raw\">",
+    ] {
+        assert!(head.contains(needle), "missing {needle:?} in\n{head}");
+    }
+    assert!(text.ends_with(b"</AppendedData>\n</VTKFile>\n"));
+
+    let d = read_vti(&path).unwrap();
+    assert_eq!(d.whole_extent, [0, 4, 0, 3, 0, 2]);
+    assert_eq!(d.origin, [-1.5, 0.25, 3.0]);
+    assert_eq!(d.spacing, [0.125; 3]);
+    assert_eq!(d.time, Some(time));
+    assert_eq!(d.arrays.len(), 2);
+    assert_eq!(d.arrays[0].0, "pressure");
+    assert_eq!(d.arrays[0].1, 1);
+    assert_eq!(d.arrays[0].2, p);
+    assert_eq!(d.arrays[1].0, "velocity");
+    assert_eq!(d.arrays[1].1, 3);
+    let v = &d.arrays[1].2;
+    assert_eq!(v.len(), 3 * grid.len());
+    for n in 0..grid.len() {
+        assert_eq!(
+            [v[3 * n], v[3 * n + 1], v[3 * n + 2]],
+            [ux[n], uy[n], uz[n]]
+        );
+    }
+    // x is the fastest axis in the file: point 1 is (1, 0, 0), point 5 is (0, 1, 0).
+    assert_eq!(v[3], 0.1);
+    assert_eq!(v[3 * 5], 1.0);
+    assert!(temp_files(s.path()).is_empty());
+}
+
+#[test]
+fn vti_2d_vector_padded_with_zero_z() {
+    let s = Scratch::new("vti2d");
+    let grid = Grid::new([6, 7, 1], 0.5, [1.0, -2.0, 99.0]);
+    let ux = field(&grid, |[i, j, _]| i as f64 - 0.7 * j as f64);
+    let uy = field(&grid, |[i, j, _]| 1.0 / (1.0 + i as f64 + j as f64));
+    let w = field(&grid, |[i, j, _]| (i * j) as f64 / 7.0);
+    let path = s.path().join("flow.vti");
+    write_vti(
+        &path,
+        &grid,
+        12.5,
+        &[
+            VtkField {
+                name: "velocity",
+                components: &[&ux, &uy],
+            },
+            VtkField {
+                name: "vorticity",
+                components: &[&w],
+            },
+        ],
+    )
+    .unwrap();
+
+    let head = String::from_utf8_lossy(&fs::read(&path).unwrap()[..1000]).into_owned();
+    assert!(head.contains("WholeExtent=\"0 5 0 6 0 0\""), "{head}");
+
+    let d = read_vti(&path).unwrap();
+    assert_eq!(d.whole_extent, [0, 5, 0, 6, 0, 0]);
+    assert_eq!(d.origin, [1.0, -2.0, 0.0]);
+    assert_eq!(d.spacing, [0.5; 3]);
+    assert_eq!(d.time, Some(12.5));
+    assert_eq!(d.arrays.len(), 2);
+    let (name, nc, v) = &d.arrays[0];
+    assert_eq!((name.as_str(), *nc), ("velocity", 3));
+    assert_eq!(v.len(), 3 * grid.len());
+    for n in 0..grid.len() {
+        assert_eq!([v[3 * n], v[3 * n + 1], v[3 * n + 2]], [ux[n], uy[n], 0.0]);
+    }
+    assert_eq!(d.arrays[1], ("vorticity".to_string(), 1, w));
+}
+
+#[test]
+fn vti_rejects_bad_fields() {
+    let s = Scratch::new("vtibad");
+    let grid = Grid::new([3, 3, 1], 1.0, [0.0; 3]);
+    let short = vec![0.0; 8];
+    let path = s.path().join("bad.vti");
+    let err = write_vti(
+        &path,
+        &grid,
+        0.0,
+        &[VtkField {
+            name: "x",
+            components: &[&short],
+        }],
+    )
+    .unwrap_err();
+    assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+    let err = write_vti(
+        &path,
+        &grid,
+        0.0,
+        &[VtkField {
+            name: "x",
+            components: &[],
+        }],
+    )
+    .unwrap_err();
+    assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+    assert!(!path.exists());
+    assert!(temp_files(s.path()).is_empty());
+}
+
+#[test]
+fn pvd_series_lists_pushed_snapshots() {
+    let s = Scratch::new("pvd");
+    let pvd_path = s.path().join("run.pvd");
+    let mut pvd = PvdSeries::new(&pvd_path);
+    let times = [0.0, 0.1 + 0.2, 1.0 / 3.0];
+    let files = ["snap_000000.vti", "snap_000001.vti", "snap_000002.vti"];
+    for (n, (&t, f)) in times.iter().zip(files).enumerate() {
+        pvd.push(t, f).unwrap();
+        // After every push the file is complete and lists exactly the pushed entries.
+        let text = fs::read_to_string(&pvd_path).unwrap();
+        assert_eq!(text.matches("<DataSet").count(), n + 1);
+        assert!(text.trim_end().ends_with("</VTKFile>"));
+    }
+    assert_eq!(pvd.entries().len(), 3);
+    assert_eq!(pvd.path(), pvd_path.as_path());
+
+    let text = fs::read_to_string(&pvd_path).unwrap();
+    assert!(text.starts_with("<?xml") || text.starts_with("<VTKFile"));
+    assert!(text.contains("<VTKFile type=\"Collection\""));
+    assert!(text.contains("<Collection>") && text.contains("</Collection>"));
+    let datasets: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("<DataSet"))
+        .collect();
+    assert_eq!(datasets.len(), 3);
+    let attr = |line: &str, key: &str| -> String {
+        let pat = format!(" {key}=\"");
+        let start = line.find(&pat).unwrap() + pat.len();
+        let end = start + line[start..].find('"').unwrap();
+        line[start..end].to_string()
+    };
+    for (line, (&t, f)) in datasets.iter().zip(times.iter().zip(files)) {
+        assert_eq!(attr(line, "timestep").parse::<f64>().unwrap(), t);
+        assert_eq!(attr(line, "file"), f);
+        assert_eq!(attr(line, "part"), "0");
+    }
+    assert!(temp_files(s.path()).is_empty());
+}
+
+#[test]
+fn atomic_write_replaces_and_failure_keeps_old() {
+    let s = Scratch::new("atomic");
+    let path = s.path().join("state.json");
+    fs::write(&path, b"old contents").unwrap();
+
+    atomic_write(&path, b"new contents").unwrap();
+    assert_eq!(fs::read(&path).unwrap(), b"new contents");
+    assert!(temp_files(s.path()).is_empty());
+
+    let err = atomic_write_with(&path, |w| {
+        w.write_all(b"partial garbage that must never appear")?;
+        Err(io::Error::other("writer failed"))
+    })
+    .unwrap_err();
+    assert_eq!(err.to_string(), "writer failed");
+    assert_eq!(fs::read(&path).unwrap(), b"new contents");
+    assert!(temp_files(s.path()).is_empty());
+
+    // Streaming writes create a file that did not exist.
+    let fresh = s.path().join("fresh.bin");
+    atomic_write_with(&fresh, |w| {
+        for i in 0u32..1000 {
+            w.write_all(&i.to_le_bytes())?;
+        }
+        Ok(())
+    })
+    .unwrap();
+    assert_eq!(fs::read(&fresh).unwrap().len(), 4000);
+    assert!(temp_files(s.path()).is_empty());
+
+    // A path in a missing directory fails without side effects.
+    assert!(atomic_write(&s.path().join("no/such/dir/x"), b"x").is_err());
+}
+
+#[test]
+fn csv_round_trip() {
+    let s = Scratch::new("csv");
+    let path = s.path().join("series.csv");
+    let header = ["time", "energy", "enstrophy"];
+    let rows = [
+        [0.0, 1.0 / 3.0, -2.5e-17],
+        [0.1 + 0.2, 1e300, 6.02214076e23],
+        [f64::MIN_POSITIVE, -0.0, 123_456_789.123_456_79 / 7.0],
+    ];
+    let mut csv = CsvWriter::create(&path, &header).unwrap();
+    for r in &rows {
+        csv.row(r).unwrap();
+    }
+    // Rows are flushed as written: readable before the writer is dropped.
+    assert_eq!(fs::read_to_string(&path).unwrap().lines().count(), 4);
+    assert_eq!(
+        csv.row(&[1.0]).unwrap_err().kind(),
+        io::ErrorKind::InvalidInput
+    );
+    csv.flush().unwrap();
+    drop(csv);
+
+    let text = fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "time,energy,enstrophy");
+    let parsed: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    assert_eq!(parsed.len(), rows.len());
+    for (p, r) in parsed.iter().zip(&rows) {
+        assert_eq!(p.len(), 3);
+        for (a, b) in p.iter().zip(r) {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+    }
+}
+
+#[test]
+fn peak_memory_is_reported_on_linux() {
+    let m = peak_memory_bytes();
+    if cfg!(target_os = "linux") {
+        let m = m.expect("VmHWM should be readable on Linux");
+        assert!(m > 1024 * 1024, "peak RSS {m} bytes is implausibly small");
+    }
+}

@@ -1,0 +1,115 @@
+//! Every bundled scene loads; bad scenes give errors that name the file, line and field.
+
+use std::path::Path;
+use tumble::engine::Simulation;
+use tumble::scene::Scene;
+
+#[test]
+fn every_bundled_scene_loads_and_steps() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "ron") {
+            let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            // One step at a small size: the scene's setup works end to end.
+            let dim = scene.dim();
+            scene.domain.cells = Some(vec![16; dim]);
+            scene.domain.h = None;
+            let mut sim =
+                Simulation::new(scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            sim.step().unwrap();
+            assert!(sim.sample().energy.is_finite());
+            n += 1;
+        }
+    }
+    assert!(n >= 4, "found only {n} scenes");
+}
+
+const GOOD: &str = r#"Scene(
+    name: "t",
+    domain: (
+        extent: [1.0, 1.0],
+        cells: [16, 16],
+    ),
+    fluid: (
+        viscosity: 0.01,
+    ),
+    numerics: (
+        end_time: 1.0,
+    ),
+)"#;
+
+fn err(text: &str) -> tumble::scene::SceneError {
+    Scene::parse(text, "bad.ron", "bad").expect_err("must be rejected")
+}
+
+#[test]
+fn good_scene_parses() {
+    let s = Scene::parse(GOOD, "good.ron", "good").unwrap();
+    assert_eq!(s.grid().n, [16, 16, 1]);
+}
+
+#[test]
+fn misspelt_field_names_line() {
+    let e = err(&GOOD.replace("viscosity:", "viscosityy:"));
+    assert_eq!(e.line, Some(8), "{e}");
+    assert!(e.to_string().contains("bad.ron"));
+    assert!(e.message.contains("viscosityy"), "{e}");
+}
+
+#[test]
+fn wrong_type_names_line() {
+    let e = err(&GOOD.replace("end_time: 1.0", "end_time: \"soon\""));
+    assert_eq!(e.line, Some(11), "{e}");
+}
+
+#[test]
+fn negative_viscosity_names_field_and_line() {
+    let e = err(&GOOD.replace("viscosity: 0.01", "viscosity: -0.01"));
+    assert_eq!(e.field.as_deref(), Some("fluid.viscosity"));
+    assert_eq!(e.line, Some(8));
+}
+
+#[test]
+fn zero_cells_rejected() {
+    let e = err(&GOOD.replace("cells: [16, 16]", "cells: [0, 16]"));
+    assert_eq!(e.field.as_deref(), Some("domain.cells"));
+    assert_eq!(e.line, Some(5));
+}
+
+#[test]
+fn extent_not_multiple_of_h_rejected() {
+    let e = err(&GOOD.replace("cells: [16, 16]", "h: 0.3"));
+    assert_eq!(e.field.as_deref(), Some("domain.h"));
+    assert_eq!(e.line, Some(5));
+    assert!(e.message.contains("multiple"), "{e}");
+}
+
+#[test]
+fn unequal_spacing_rejected() {
+    let e = err(&GOOD.replace("cells: [16, 16]", "cells: [16, 32]"));
+    assert_eq!(e.field.as_deref(), Some("domain.cells"));
+}
+
+#[test]
+fn malformed_ron_names_line() {
+    let e = err(&GOOD.replace("end_time: 1.0,", "end_time: 1.0,,"));
+    assert_eq!(e.line, Some(11), "{e}");
+}
+
+#[test]
+fn three_d_field_in_2d_rejected() {
+    let text = GOOD.replace(
+        "    numerics:",
+        "    initial: [TaylorGreen3d()],\n    numerics:",
+    );
+    let e = err(&text);
+    assert!(e.message.contains("3D"), "{e}");
+}
+
+#[test]
+fn missing_file_is_an_error() {
+    let e = Scene::load(Path::new("/no/such/scene.ron")).unwrap_err();
+    assert!(e.message.contains("cannot read"));
+}

@@ -1,0 +1,757 @@
+//! Integration tests of the periodic FFT solver (`tumble::spectral`).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::f64::consts::PI;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use tumble::grid::Grid;
+use tumble::spectral::*;
+
+// ---------------------------------------------------------------------------------------------
+// Allocation counting: only threads marked through `MARK` (the workers of a dedicated rayon pool
+// and the test thread while it measures) count, so concurrently running tests do not interfere.
+
+struct Counting;
+
+thread_local! {
+    static MARK: Cell<bool> = const { Cell::new(false) };
+}
+static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+
+fn count() {
+    if MARK.with(|m| m.get()) {
+        ALLOCS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count();
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        count();
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count();
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+
+/// Deterministic pseudo-random numbers in [-1, 1) (splitmix64).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+
+    fn field(&mut self, len: usize) -> Vec<f64> {
+        (0..len).map(|_| self.next()).collect()
+    }
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+fn max_abs(a: &[f64]) -> f64 {
+    a.iter().map(|x| x.abs()).fold(0.0, f64::max)
+}
+
+/// Samples `f(x, y, z)` on every node.
+fn sample(grid: &Grid, f: impl Fn([f64; 3]) -> f64) -> Vec<f64> {
+    let mut v = Vec::with_capacity(grid.len());
+    for k in 0..grid.n[2] {
+        for j in 0..grid.n[1] {
+            for i in 0..grid.n[0] {
+                v.push(f(grid.pos(i, j, k)));
+            }
+        }
+    }
+    v
+}
+
+/// One Fourier term `amp sin(k . x + phase)` of component `comp` of a vector potential, with
+/// integer mode numbers `m` (so `k_a = 2 pi m_a / L_a`).
+#[derive(Clone, Copy)]
+struct Term {
+    comp: usize,
+    m: [i32; 3],
+    amp: f64,
+    phase: f64,
+}
+
+impl Term {
+    fn k(&self, grid: &Grid) -> [f64; 3] {
+        let e = grid.extent();
+        std::array::from_fn(|a| {
+            if e[a] > 0.0 {
+                2.0 * PI * self.m[a] as f64 / e[a]
+            } else {
+                0.0
+            }
+        })
+    }
+    fn arg(&self, grid: &Grid, x: [f64; 3]) -> f64 {
+        let k = self.k(grid);
+        k[0] * x[0] + k[1] * x[1] + k[2] * x[2] + self.phase
+    }
+    fn k2(&self, grid: &Grid) -> f64 {
+        self.k(grid).iter().map(|v| v * v).sum()
+    }
+}
+
+/// Analytic vorticity (`-Lap psi`) and velocity (`curl psi`, plus `background`) of a potential
+/// made of `terms` (a scalar stream function in 2D: all `comp == 0`).
+fn analytic(grid: &Grid, terms: &[Term], background: [f64; 3]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let ncomp = grid.omega_components();
+    let omega: Vec<Vec<f64>> = (0..ncomp)
+        .map(|c| {
+            sample(grid, |x| {
+                terms
+                    .iter()
+                    .filter(|t| t.comp == c)
+                    .map(|t| t.k2(grid) * t.amp * t.arg(grid, x).sin())
+                    .sum()
+            })
+        })
+        .collect();
+    // d psi_c / d x_a
+    let dpsi = |c: usize, a: usize, x: [f64; 3]| -> f64 {
+        terms
+            .iter()
+            .filter(|t| t.comp == c)
+            .map(|t| t.amp * t.k(grid)[a] * t.arg(grid, x).cos())
+            .sum()
+    };
+    let u: Vec<Vec<f64>> = (0..grid.dim)
+        .map(|c| {
+            sample(grid, |x| {
+                background[c]
+                    + if grid.dim == 2 {
+                        if c == 0 {
+                            dpsi(0, 1, x)
+                        } else {
+                            -dpsi(0, 0, x)
+                        }
+                    } else {
+                        let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                        dpsi(b, a, x) - dpsi(a, b, x)
+                    }
+            })
+        })
+        .collect();
+    (omega, u)
+}
+
+/// Spectral divergence (Nyquist wavenumbers zeroed) of a 3D field, as max |div_hat| over
+/// max |k| max |w_hat|.
+fn relative_divergence(grid: &Grid, sp: &mut Spectral, w: &[Vec<f64>]) -> f64 {
+    let [nx, ny, nz] = grid.n;
+    let e = grid.extent();
+    let nxh = nx / 2 + 1;
+    let kd = |m: usize, n: usize, l: f64| {
+        if 2 * m == n { 0.0 } else { wavenumber(m, n, l) }
+    };
+    let hats: Vec<Vec<C64>> = w
+        .iter()
+        .map(|c| {
+            let mut o = vec![C64::default(); sp.complex_len()];
+            sp.forward(c, &mut o);
+            o
+        })
+        .collect();
+    let (mut dmax, mut wmax, mut kmax) = (0.0f64, 0.0f64, 0.0f64);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nxh {
+                let idx = i + nxh * (j + ny * k);
+                let kv = [kd(i, nx, e[0]), kd(j, ny, e[1]), kd(k, nz, e[2])];
+                let d = hats[0][idx] * kv[0] + hats[1][idx] * kv[1] + hats[2][idx] * kv[2];
+                dmax = dmax.max(d.norm());
+                for (a, h) in hats.iter().enumerate() {
+                    wmax = wmax.max(h[idx].norm());
+                    kmax = kmax.max(kv[a].abs());
+                }
+            }
+        }
+    }
+    dmax / (wmax * kmax)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transforms
+
+#[test]
+fn wavenumbers_are_signed_with_positive_nyquist() {
+    let l = 2.0 * PI;
+    assert_eq!(wavenumber(0, 8, l), 0.0);
+    assert!((wavenumber(3, 8, l) - 3.0).abs() < 1e-15);
+    assert!((wavenumber(4, 8, l) - 4.0).abs() < 1e-15);
+    assert!((wavenumber(5, 8, l) + 3.0).abs() < 1e-15);
+    assert!((wavenumber(2, 5, l) - 2.0).abs() < 1e-15);
+    assert!((wavenumber(3, 5, l) + 2.0).abs() < 1e-15);
+    assert!((wavenumber(1, 4, 0.5) - 4.0 * PI).abs() < 1e-13);
+}
+
+#[test]
+fn roundtrip_random_2d_3d_odd_even() {
+    let sizes = [
+        [12, 10, 8],
+        [9, 7, 5],
+        [8, 5, 7],
+        [7, 6, 4],
+        [9, 6, 1],
+        [8, 10, 1],
+        [1, 4, 1],
+        [5, 1, 3],
+    ];
+    let mut rng = Rng(42);
+    for n in sizes {
+        let grid = Grid::new(n, 0.1, [0.0; 3]);
+        let mut sp = Spectral::new(&grid);
+        assert_eq!(sp.complex_len(), (n[0] / 2 + 1) * n[1] * n[2]);
+        let f = rng.field(grid.len());
+        let mut hat = vec![C64::default(); sp.complex_len()];
+        sp.forward(&f, &mut hat);
+        let mut back = vec![0.0; grid.len()];
+        sp.inverse(&mut hat, &mut back);
+        let err = max_diff(&f, &back);
+        assert!(err < 1e-12, "roundtrip {n:?}: error {err:e}");
+    }
+}
+
+#[test]
+fn forward_matches_naive_dft() {
+    for n in [[6, 5, 4], [5, 4, 1], [4, 3, 3]] {
+        let grid = Grid::new(n, 1.0, [0.0; 3]);
+        let mut sp = Spectral::new(&grid);
+        let f = Rng(7).field(grid.len());
+        let mut hat = vec![C64::default(); sp.complex_len()];
+        sp.forward(&f, &mut hat);
+        let nxh = n[0] / 2 + 1;
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..nxh {
+                    let mut s = C64::default();
+                    for z in 0..n[2] {
+                        for y in 0..n[1] {
+                            for x in 0..n[0] {
+                                let ph = -2.0
+                                    * PI
+                                    * ((i * x) as f64 / n[0] as f64
+                                        + (j * y) as f64 / n[1] as f64
+                                        + (k * z) as f64 / n[2] as f64);
+                                s += C64::from_polar(f[grid.idx(x, y, z)], ph);
+                            }
+                        }
+                    }
+                    let got = hat[i + nxh * (j + n[1] * k)];
+                    assert!(
+                        (got - s).norm() < 1e-12,
+                        "{n:?} ({i},{j},{k}): {got} vs {s}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Velocity
+
+fn check_velocity(grid: &Grid, terms: &[Term], background: [f64; 3], tol: f64) {
+    let (mut omega, u_exact) = analytic(grid, terms, background);
+    let omega0 = omega.clone();
+    let mut sp = Spectral::new(grid);
+    let mut u = vec![vec![0.0; grid.len()]; grid.dim];
+    sp.velocity(&mut omega, 1, background, &mut u);
+    for c in 0..grid.dim {
+        let err = max_diff(&u[c], &u_exact[c]);
+        assert!(err < tol, "{:?} u[{c}] error {err:e}", grid.n);
+    }
+    // The analytic vorticity is divergence-free: cleaning must leave it as it was.
+    for c in 0..omega.len() {
+        let err = max_diff(&omega[c], &omega0[c]);
+        assert!(err < tol, "{:?} omega[{c}] changed by {err:e}", grid.n);
+    }
+}
+
+#[test]
+fn velocity_2d_unit_square_2pi() {
+    // psi = sin x cos 2y, omega = 5 sin x cos 2y, u = -2 sin x sin 2y, v = -cos x cos 2y.
+    let grid = Grid::new([32, 32, 1], 2.0 * PI / 32.0, [0.0; 3]);
+    let half = PI / 2.0;
+    let terms = [
+        // sin x cos 2y = (sin(x + 2y) + sin(x - 2y)) / 2
+        Term {
+            comp: 0,
+            m: [1, 2, 0],
+            amp: 0.5,
+            phase: 0.0,
+        },
+        Term {
+            comp: 0,
+            m: [1, -2, 0],
+            amp: 0.5,
+            phase: 0.0,
+        },
+    ];
+    check_velocity(&grid, &terms, [0.0; 3], 1e-10);
+    // Cross-check the explicit formulas given in the docs.
+    let (omega, u) = analytic(&grid, &terms, [0.0; 3]);
+    let w2 = sample(&grid, |x| 5.0 * x[0].sin() * (2.0 * x[1]).cos());
+    let u2 = sample(&grid, |x| -2.0 * x[0].sin() * (2.0 * x[1]).sin());
+    let v2 = sample(&grid, |x| -x[0].cos() * (2.0 * x[1]).cos());
+    assert!(max_diff(&omega[0], &w2) < 1e-13);
+    assert!(max_diff(&u[0], &u2) < 1e-13);
+    assert!(max_diff(&u[1], &v2) < 1e-13);
+    // Plus a background flow and a shifted origin.
+    let grid = Grid::new([24, 20, 1], 2.0 * PI / 24.0, [0.3, -1.0, 0.0]);
+    let terms = [
+        Term {
+            comp: 0,
+            m: [1, 2, 0],
+            amp: 0.7,
+            phase: half,
+        },
+        Term {
+            comp: 0,
+            m: [3, -1, 0],
+            amp: -0.4,
+            phase: 0.2,
+        },
+    ];
+    check_velocity(&grid, &terms, [0.25, -0.5, 0.0], 1e-10);
+}
+
+#[test]
+fn velocity_2d_box_not_2pi() {
+    // [0,1] x [0,3]: ky = 2 pi m / 3.
+    let grid = Grid::new([16, 48, 1], 1.0 / 16.0, [0.0; 3]);
+    let terms = [
+        Term {
+            comp: 0,
+            m: [1, 2, 0],
+            amp: 1.0,
+            phase: 0.0,
+        },
+        Term {
+            comp: 0,
+            m: [-2, 1, 0],
+            amp: 0.3,
+            phase: 1.0,
+        },
+        Term {
+            comp: 0,
+            m: [0, 5, 0],
+            amp: 0.2,
+            phase: -0.5,
+        },
+        Term {
+            comp: 0,
+            m: [3, 0, 0],
+            amp: 0.1,
+            phase: 0.7,
+        },
+    ];
+    check_velocity(&grid, &terms, [1.0, 2.0, 0.0], 1e-10);
+    // Odd sizes too.
+    let grid = Grid::new([15, 21, 1], 0.05, [0.0; 3]);
+    check_velocity(&grid, &terms, [0.0; 3], 1e-10);
+}
+
+#[test]
+fn velocity_3d_non_cubic_box() {
+    // n = 32 x 24 x 40, h = 2 pi / 32: box [0, 2pi] x [0, 1.5 pi] x [0, 2.5 pi].
+    let grid = Grid::new([32, 24, 40], 2.0 * PI / 32.0, [0.0; 3]);
+    // Each term of component c is independent of x_c, so div psi = 0.
+    let terms = [
+        Term {
+            comp: 0,
+            m: [0, 1, 2],
+            amp: 1.0,
+            phase: 0.3,
+        },
+        Term {
+            comp: 1,
+            m: [2, 0, -1],
+            amp: 0.7,
+            phase: 1.1,
+        },
+        Term {
+            comp: 2,
+            m: [1, -2, 0],
+            amp: -0.5,
+            phase: -0.4,
+        },
+        Term {
+            comp: 0,
+            m: [0, 3, 1],
+            amp: 0.2,
+            phase: 0.9,
+        },
+        Term {
+            comp: 2,
+            m: [4, 1, 0],
+            amp: 0.1,
+            phase: 0.0,
+        },
+    ];
+    check_velocity(&grid, &terms, [0.0; 3], 1e-10);
+    check_velocity(&grid, &terms, [0.3, -0.2, 0.1], 1e-10);
+    // Odd sizes.
+    let grid = Grid::new([15, 9, 11], 0.4, [1.0, 2.0, 3.0]);
+    check_velocity(&grid, &terms, [0.3, -0.2, 0.1], 1e-10);
+    // Few z-planes (x and y transforms not fused), even and odd.
+    let grid = Grid::new([16, 12, 6], 0.3, [0.0; 3]);
+    check_velocity(&grid, &terms, [0.3, -0.2, 0.1], 1e-10);
+    let grid = Grid::new([11, 10, 5], 0.3, [0.0; 3]);
+    check_velocity(&grid, &terms, [0.0; 3], 1e-10);
+}
+
+#[test]
+fn velocity_cached_equals_fresh() {
+    for n in [[16, 12, 10], [12, 9, 1]] {
+        let grid = Grid::new(n, 0.2, [0.0; 3]);
+        let ncomp = grid.omega_components();
+        let mut rng = Rng(3);
+        let mut omega: Vec<Vec<f64>> = (0..ncomp).map(|_| rng.field(grid.len())).collect();
+        let mut sp = Spectral::new(&grid);
+        let bg = [0.1, 0.2, 0.3];
+        sp.diffuse(&mut omega, 0.05, 7);
+        assert_eq!(sp.cached_version(), Some(7));
+        let mut u1 = vec![vec![0.0; grid.len()]; grid.dim];
+        sp.velocity(&mut omega, 7, bg, &mut u1);
+
+        // Fresh solver: forward transform of the (already clean) omega.
+        let mut omega2 = omega.clone();
+        let mut sp2 = Spectral::new(&grid);
+        let mut u2 = vec![vec![0.0; grid.len()]; grid.dim];
+        sp2.velocity(&mut omega2, 0, bg, &mut u2);
+        // Same solver, new version: transforms again.
+        let mut omega3 = omega.clone();
+        let mut u3 = vec![vec![0.0; grid.len()]; grid.dim];
+        sp.velocity(&mut omega3, 8, bg, &mut u3);
+        assert_eq!(sp.cached_version(), Some(8));
+        let scale = u1.iter().map(|c| max_abs(c)).fold(0.0, f64::max);
+        for c in 0..grid.dim {
+            assert!(
+                max_diff(&u1[c], &u2[c]) < 1e-12 * scale,
+                "{n:?} fresh u[{c}]"
+            );
+            assert!(
+                max_diff(&u1[c], &u3[c]) < 1e-12 * scale,
+                "{n:?} re-made u[{c}]"
+            );
+        }
+        for c in 0..ncomp {
+            assert!(max_diff(&omega[c], &omega2[c]) < 1e-12, "{n:?} omega[{c}]");
+        }
+        // A changed omega with a stale version is ignored (cache used) ...
+        let mut zero: Vec<Vec<f64>> = vec![vec![0.0; grid.len()]; ncomp];
+        let mut u4 = vec![vec![0.0; grid.len()]; grid.dim];
+        sp.velocity(&mut zero, 8, bg, &mut u4);
+        assert_eq!(u4, u3);
+        // ... and picked up with a new one.
+        sp.velocity(&mut zero, 9, bg, &mut u4);
+        for c in 0..grid.dim {
+            assert!(u4[c].iter().all(|&v| (v - bg[c]).abs() < 1e-14));
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Diffusion and divergence cleaning
+
+fn modified_symbol(grid: &Grid, t: &Term) -> f64 {
+    let k = t.k(grid);
+    let h = grid.h;
+    (0..grid.dim)
+        .map(|a| (2.0 - 2.0 * (k[a] * h).cos()) / (h * h))
+        .sum()
+}
+
+#[test]
+fn diffuse_single_mode_decays_exactly() {
+    let nu_dt = 0.013;
+    // 2D
+    let grid = Grid::new([16, 12, 1], 0.3, [0.1, 0.2, 0.0]);
+    for m in [[1, 0, 0], [3, -2, 0], [8, 6, 0], [0, 5, 0]] {
+        let t = Term {
+            comp: 0,
+            m,
+            amp: 1.3,
+            phase: 0.4,
+        };
+        let f = 1.0 / (1.0 + nu_dt * modified_symbol(&grid, &t));
+        let w0 = sample(&grid, |x| t.amp * t.arg(&grid, x).sin());
+        let mut w = vec![w0.clone()];
+        let mut sp = Spectral::new(&grid);
+        sp.diffuse(&mut w, nu_dt, 1);
+        let expect: Vec<f64> = w0.iter().map(|v| v * f).collect();
+        let err = max_diff(&w[0], &expect);
+        assert!(err < 1e-12, "2D mode {m:?}: {err:e}");
+    }
+    // 3D: divergence-free single modes (component c independent of x_c).
+    let grid = Grid::new([16, 12, 10], 0.3, [0.0; 3]);
+    let mut sp = Spectral::new(&grid);
+    for (c, m) in [
+        (2, [2, 3, 0]),
+        (0, [0, -1, 4]),
+        (1, [8, 0, 5]),
+        (0, [0, 6, 5]),
+    ] {
+        let t = Term {
+            comp: c,
+            m,
+            amp: 0.8,
+            phase: -0.3,
+        };
+        let f = 1.0 / (1.0 + nu_dt * modified_symbol(&grid, &t));
+        let w0 = sample(&grid, |x| t.amp * t.arg(&grid, x).cos());
+        let mut w = vec![vec![0.0; grid.len()]; 3];
+        w[c] = w0.clone();
+        sp.diffuse(&mut w, nu_dt, 2);
+        for (a, wa) in w.iter().enumerate() {
+            let err = if a == c {
+                let expect: Vec<f64> = w0.iter().map(|v| v * f).collect();
+                max_diff(wa, &expect)
+            } else {
+                max_abs(wa)
+            };
+            assert!(err < 1e-12, "3D mode {m:?} comp {a}: {err:e}");
+        }
+    }
+}
+
+#[test]
+fn diffuse_cleans_divergence_3d() {
+    for n in [[12, 10, 8], [9, 7, 5]] {
+        let grid = Grid::new(n, 0.25, [0.0; 3]);
+        let mut sp = Spectral::new(&grid);
+        let mut rng = Rng(11);
+        let mut w: Vec<Vec<f64>> = (0..3).map(|_| rng.field(grid.len())).collect();
+        let before = relative_divergence(&grid, &mut sp, &w);
+        assert!(before > 0.1, "random field should not be divergence-free");
+        sp.diffuse(&mut w, 0.0, 1);
+        let after = relative_divergence(&grid, &mut sp, &w);
+        assert!(after < 1e-12, "{n:?}: divergence after cleaning {after:e}");
+        // Cleaning (without diffusion) a divergence-free field changes nothing.
+        let clean = w.clone();
+        sp.diffuse(&mut w, 0.0, 2);
+        for c in 0..3 {
+            let err = max_diff(&w[c], &clean[c]);
+            assert!(err < 1e-12, "{n:?}: idempotence comp {c}: {err:e}");
+        }
+        // With diffusion too.
+        let mut w: Vec<Vec<f64>> = (0..3).map(|_| rng.field(grid.len())).collect();
+        sp.diffuse(&mut w, 0.3, 3);
+        let after = relative_divergence(&grid, &mut sp, &w);
+        assert!(after < 1e-12, "{n:?}: divergence after diffusion {after:e}");
+    }
+    // An analytic divergence-free field is unchanged.
+    let grid = Grid::new([32, 24, 40], 2.0 * PI / 32.0, [0.0; 3]);
+    let terms = [
+        Term {
+            comp: 0,
+            m: [0, 1, 2],
+            amp: 1.0,
+            phase: 0.3,
+        },
+        Term {
+            comp: 1,
+            m: [2, 0, -1],
+            amp: 0.7,
+            phase: 1.1,
+        },
+        Term {
+            comp: 2,
+            m: [1, -2, 0],
+            amp: -0.5,
+            phase: -0.4,
+        },
+    ];
+    let (omega0, _) = analytic(&grid, &terms, [0.0; 3]);
+    let mut omega = omega0.clone();
+    let mut sp = Spectral::new(&grid);
+    sp.diffuse(&mut omega, 0.0, 1);
+    for c in 0..3 {
+        let err = max_diff(&omega[c], &omega0[c]);
+        assert!(err < 1e-12, "analytic comp {c}: {err:e}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Determinism and allocation
+
+/// Everything the solver computes on a fixed input, as bits.
+fn run_all(n: [usize; 3]) -> Vec<u64> {
+    let grid = Grid::new(n, 0.17, [0.0; 3]);
+    let mut sp = Spectral::new(&grid);
+    let mut rng = Rng(99);
+    let ncomp = grid.omega_components();
+    let mut omega: Vec<Vec<f64>> = (0..ncomp).map(|_| rng.field(grid.len())).collect();
+    let mut out = Vec::new();
+    let mut hat = vec![C64::default(); sp.complex_len()];
+    sp.forward(&omega[0], &mut hat);
+    out.extend(hat.iter().flat_map(|z| [z.re.to_bits(), z.im.to_bits()]));
+    let mut back = vec![0.0; grid.len()];
+    sp.inverse(&mut hat, &mut back);
+    out.extend(back.iter().map(|v| v.to_bits()));
+    let mut u = vec![vec![0.0; grid.len()]; grid.dim];
+    sp.velocity(&mut omega, 1, [0.1, 0.2, 0.3], &mut u);
+    out.extend(u.iter().flatten().map(|v| v.to_bits()));
+    sp.diffuse(&mut omega, 0.02, 2);
+    out.extend(omega.iter().flatten().map(|v| v.to_bits()));
+    sp.velocity(&mut omega, 2, [0.0; 3], &mut u);
+    out.extend(u.iter().flatten().map(|v| v.to_bits()));
+    out
+}
+
+#[test]
+fn bit_identical_across_thread_counts() {
+    for n in [
+        [24, 20, 18],
+        [17, 12, 9],
+        [20, 18, 6],
+        [40, 30, 1],
+        [33, 21, 1],
+    ] {
+        // 12 threads also changes the number of scratch workers (chunks).
+        let results: Vec<Vec<u64>> = [1, 2, 3, 12]
+            .iter()
+            .map(|&t| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap()
+                    .install(|| run_all(n))
+            })
+            .collect();
+        for (t, r) in results.iter().enumerate().skip(1) {
+            assert!(
+                *r == results[0],
+                "{n:?}: thread count #{t} differs from 1 thread"
+            );
+        }
+    }
+}
+
+#[test]
+fn no_allocation_after_new() {
+    for n in [[16, 12, 10], [20, 14, 1]] {
+        let grid = Grid::new(n, 0.1, [0.0; 3]);
+        // One worker thread: the work is the same as with more (fixed chunks), while rayon's own
+        // work-stealing bookkeeping (which may allocate the first time a thread steals) stays
+        // out of the count.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .start_handler(|_| MARK.with(|m| m.set(true)))
+            .build()
+            .unwrap();
+        let ncomp = grid.omega_components();
+        let mut rng = Rng(5);
+        let mut omega: Vec<Vec<f64>> = (0..ncomp).map(|_| rng.field(grid.len())).collect();
+        let mut u = vec![vec![0.0; grid.len()]; grid.dim];
+        let a0 = ALLOCS.load(Ordering::Relaxed);
+        let mut sp = pool.install(|| Spectral::new(&grid));
+        // The counter works: `new` allocates on a marked worker thread.
+        assert!(
+            ALLOCS.load(Ordering::Relaxed) > a0,
+            "allocation counter is not counting"
+        );
+        let mut hat = vec![C64::default(); sp.complex_len()];
+        let mut back = vec![0.0; grid.len()];
+        let mut step = |sp: &mut Spectral, v: u64| {
+            sp.forward(&omega[0], &mut hat);
+            sp.inverse(&mut hat, &mut back);
+            sp.diffuse(&mut omega, 0.01, v);
+            sp.velocity(&mut omega, v, [0.0; 3], &mut u);
+            sp.velocity(&mut omega, v + 100, [0.0; 3], &mut u);
+        };
+        // Warm up (lets rayon's own queues reach their working size).
+        pool.install(|| step(&mut sp, 0));
+        let before = ALLOCS.load(Ordering::Relaxed);
+        pool.install(|| {
+            MARK.with(|m| m.set(true));
+            for v in 1..4 {
+                step(&mut sp, v);
+            }
+        });
+        let after = ALLOCS.load(Ordering::Relaxed);
+        assert_eq!(after - before, 0, "{n:?}: allocations after Spectral::new");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timing (run with `cargo test --release --test spectral -- --ignored --nocapture`)
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+#[test]
+#[ignore]
+fn timing_128_cubed() {
+    let n = 128;
+    let grid = Grid::new([n, n, n], 2.0 * PI / n as f64, [0.0; 3]);
+    let mut sp = Spectral::new(&grid);
+    let mut rng = Rng(1);
+    let mut omega: Vec<Vec<f64>> = (0..3).map(|_| rng.field(grid.len())).collect();
+    let mut hats: Vec<Vec<C64>> = (0..3)
+        .map(|_| vec![C64::default(); sp.complex_len()])
+        .collect();
+    let mut out = vec![0.0; grid.len()];
+    let mut u = vec![vec![0.0; grid.len()]; 3];
+    let mut raw = Vec::new();
+    let mut step = Vec::new();
+    for it in 0..6 {
+        let t0 = Instant::now();
+        for c in 0..3 {
+            sp.forward(&omega[c], &mut hats[c]);
+        }
+        for r in 0..6 {
+            sp.inverse(&mut hats[r % 3], &mut out);
+        }
+        let t1 = Instant::now();
+        sp.diffuse(&mut omega, 1e-3, it);
+        sp.velocity(&mut omega, it, [0.0; 3], &mut u);
+        let t2 = Instant::now();
+        if it > 0 {
+            raw.push((t1 - t0).as_secs_f64());
+            step.push((t2 - t1).as_secs_f64());
+        }
+    }
+    println!(
+        "128^3 on {} rayon threads: 3 forward + 6 inverse: median {:.4} s (min {:.4}); \
+         diffuse + cached velocity: median {:.4} s",
+        rayon::current_num_threads(),
+        median(raw.clone()),
+        raw.iter().cloned().fold(f64::INFINITY, f64::min),
+        median(step)
+    );
+}
