@@ -70,8 +70,10 @@ pub fn lambda42(x: f64) -> f64 {
 /// Split a position in grid units into the base node `floor(x)` and the fraction in `[0, 1)`.
 #[inline(always)]
 pub fn split(x: f64) -> (i64, f64) {
-    let b = x.floor();
-    (b as i64, x - b)
+    // `f64::floor` is a libm call without SSE4.1; truncation plus a correction is not.
+    let t = x as i64;
+    let b = if (t as f64) > x { t - 1 } else { t };
+    (b, x - b as f64)
 }
 
 #[cfg(test)]

@@ -30,7 +30,6 @@ fn taylor_green_2d_energy_decay() {
 }
 
 #[test]
-#[ignore = "E(5) is 5% above the reference at 32^3 and 4% at 64^3: under investigation (see README)"]
 fn taylor_green_3d_energy() {
     check("taylor-green-3d");
 }
