@@ -505,9 +505,8 @@ fn taylor_green_3d(quick: bool) -> anyhow::Result<Report> {
         let start = std::time::Instant::now();
         sim.run_until(5.0, |_| {})?;
         let e = sim.sample().energy;
-        let tol = if n >= 64 { 0.02 } else { 0.05 };
         rep.rows
-            .push(Row::rel(format!("{n}^3: E(t = 5)"), E5, e, tol));
+            .push(Row::rel(format!("{n}^3: E(t = 5)"), E5, e, 0.02));
         rep.notes.push(format!(
             "{n}^3: E0 = {e0:.6} (0.125 exact), {} steps, {:.1} s",
             sim.steps(),
