@@ -12,10 +12,12 @@ pub mod fields;
 pub mod grid;
 pub mod init;
 pub mod kernels;
+pub mod levelset;
 pub mod output;
 pub mod run;
 pub mod scene;
 pub mod schedule;
+pub mod shapes;
 pub mod spectral;
 pub mod validate;
 
