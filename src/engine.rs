@@ -4,7 +4,7 @@ use crate::fields::{Fields, Params, Sample, SimTime, Timings};
 use crate::grid::Grid;
 use crate::init::add_initial;
 use crate::scene::Scene;
-use crate::schedule::{startup_schedule, step_schedule};
+use crate::schedule::{startup_schedule, step_schedule_with};
 use crate::spectral::Spectral;
 use crate::systems::diagnostics::Diagnostics;
 use crate::systems::transport::TransportScratch;
@@ -40,13 +40,18 @@ impl Simulation {
             ..Default::default()
         });
         world.insert_resource(Timings::default());
+        let n_bodies = crate::bodies::spawn_bodies(&mut world, &scene, &grid)?;
+        if n_bodies > 0 {
+            world.insert_resource(crate::bodies::BodyFields::new(&grid, scene.fluid.density));
+            world.insert_resource(crate::systems::rigid_velocity::BodySums::new(&grid));
+        }
         world.insert_resource(grid);
         let mut startup = startup_schedule();
         startup
             .initialize(&mut world)
             .map_err(|e| anyhow::anyhow!("the startup schedule cannot be built: {e:?}"))?;
         startup.run(&mut world);
-        let mut schedule = step_schedule();
+        let mut schedule = step_schedule_with(n_bodies > 0);
         schedule
             .initialize(&mut world)
             .map_err(|e| anyhow::anyhow!("the step schedule cannot be built: {e:?}"))?;

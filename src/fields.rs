@@ -88,6 +88,12 @@ pub struct Params {
     pub midpoint_velocity: bool,
     /// Interpolation and remeshing kernel.
     pub remesh_kernel: crate::scene::RemeshKernel,
+    /// Penalization coefficient λ.
+    pub lambda: f64,
+    /// Half-width of the smoothed Heaviside, in cells.
+    pub interface_cells: f64,
+    /// Boussinesq form of the baroclinic term.
+    pub boussinesq: bool,
 }
 
 impl Params {
@@ -103,6 +109,9 @@ impl Params {
             blowup_factor: scene.numerics.blowup_factor,
             midpoint_velocity: scene.numerics.midpoint_velocity,
             remesh_kernel: scene.numerics.remesh_kernel,
+            lambda: scene.numerics.lambda,
+            interface_cells: scene.numerics.interface_cells,
+            boussinesq: scene.numerics.boussinesq,
         }
     }
 }

@@ -7,6 +7,7 @@
 // Numerical kernels index several arrays with one loop variable; iterators would obscure them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bodies;
 pub mod engine;
 pub mod fields;
 pub mod grid;

@@ -94,10 +94,14 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
         &["t", "dt", "energy", "enstrophy", "circulation", "max_omega"],
     )
     .context("cannot create series.csv")?;
+    let mut bodies_csv = BodiesCsv::create(&dir.join("bodies.csv"), &sim)?;
     let mut pvd = PvdSeries::new(dir.join("fields.pvd"));
     let mut snapshot = 0usize;
     write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
     write_row(&mut series, &sim.sample())?;
+    if let Some(b) = bodies_csv.as_mut() {
+        b.rows(&mut sim)?;
+    }
 
     let bar = progress_bar(opts.quiet);
     let mut totals: Vec<(&'static str, f64)> = Vec::new();
@@ -110,6 +114,9 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
             while sim.time() < stop * (1.0 - 1e-12) {
                 sim.step()?;
                 write_row(&mut series, &sim.sample())?;
+                if let Some(b) = bodies_csv.as_mut() {
+                    b.rows(&mut sim)?;
+                }
                 for &(name, s) in &sim.timings().last {
                     match totals.iter_mut().find(|e| e.0 == name) {
                         Some(e) => e.1 += s,
@@ -152,6 +159,9 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     })();
     bar.finish_and_clear();
     series.flush().context("cannot write series.csv")?;
+    if let Some(b) = bodies_csv.as_mut() {
+        b.flush()?;
+    }
     let wall = wall0.elapsed().as_secs_f64();
     let summary = RunSummary {
         dir: dir.clone(),
@@ -207,6 +217,17 @@ fn write_snapshot(
     let f = sim.fields();
     let omega: Vec<&[f64]> = f.omega().iter().map(|c| c.as_slice()).collect();
     let u: Vec<&[f64]> = f.u.iter().map(|c| c.as_slice()).collect();
+    let bf = sim.world.get_resource::<crate::bodies::BodyFields>();
+    let rho: Vec<&[f64]> = bf.map(|b| vec![b.rho.as_slice()]).unwrap_or_default();
+    let chi: Vec<&[f64]> = bf.map(|b| vec![b.chi.as_slice()]).unwrap_or_default();
+    let phi_clamped: Vec<f64> = bf
+        .map(|b| b.phi.iter().map(|p| p.max(-1e30)).collect())
+        .unwrap_or_default();
+    let phi: Vec<&[f64]> = if bf.is_some() {
+        vec![phi_clamped.as_slice()]
+    } else {
+        Vec::new()
+    };
     let mut fields = Vec::new();
     for name in &sim.scene().output.fields {
         match name {
@@ -218,6 +239,22 @@ fn write_snapshot(
                 name: "velocity",
                 components: &u,
             }),
+            FieldName::Density => {
+                if bf.is_some() {
+                    fields.push(VtkField {
+                        name: "density",
+                        components: &rho,
+                    });
+                    fields.push(VtkField {
+                        name: "chi",
+                        components: &chi,
+                    });
+                    fields.push(VtkField {
+                        name: "phi",
+                        components: &phi,
+                    });
+                }
+            }
         }
     }
     let file = format!("fields_{:06}.vti", *snapshot);
@@ -241,5 +278,78 @@ impl Log {
     fn line(&mut self, s: &str) -> anyhow::Result<()> {
         use std::io::Write;
         writeln!(self.0, "{s}").context("cannot write log.txt")
+    }
+}
+
+/// `bodies.csv`: one row per moving body per step.
+pub struct BodiesCsv(std::io::BufWriter<std::fs::File>);
+
+/// The header of `bodies.csv`.
+pub const BODIES_HEADER: &str = "t,id,name,x,y,z,vx,vy,vz,wx,wy,wz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz";
+
+impl BodiesCsv {
+    /// Create the file if the scene has moving bodies.
+    pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Option<Self>> {
+        if !sim
+            .scene()
+            .bodies
+            .iter()
+            .any(|b| !matches!(b.kind, crate::scene::BodyKind::Static))
+        {
+            return Ok(None);
+        }
+        use std::io::Write;
+        let f = std::fs::File::create(path)
+            .with_context(|| format!("cannot create {}", path.display()))?;
+        let mut w = std::io::BufWriter::new(f);
+        writeln!(w, "{BODIES_HEADER}").context("cannot write bodies.csv")?;
+        Ok(Some(BodiesCsv(w)))
+    }
+
+    /// Append the current state of every moving body.
+    pub fn rows(&mut self, sim: &mut Simulation) -> anyhow::Result<()> {
+        use crate::bodies::{Body, Hydro, RigidState};
+        use std::io::Write;
+        let t = sim.time();
+        let mut q = sim.world.query::<(&Body, &RigidState, &Hydro)>();
+        for (b, s, h) in q.iter(&sim.world) {
+            if b.is_static() {
+                continue;
+            }
+            let o = s.orientation;
+            writeln!(
+                self.0,
+                "{t},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                b.id,
+                b.name,
+                s.center.x,
+                s.center.y,
+                s.center.z,
+                s.velocity.x,
+                s.velocity.y,
+                s.velocity.z,
+                s.angular_velocity.x,
+                s.angular_velocity.y,
+                s.angular_velocity.z,
+                o.w,
+                o.x,
+                o.y,
+                o.z,
+                h.force.x,
+                h.force.y,
+                h.force.z,
+                h.torque.x,
+                h.torque.y,
+                h.torque.z
+            )
+            .context("cannot write bodies.csv")?;
+        }
+        Ok(())
+    }
+
+    /// Flush to disk.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        use std::io::Write;
+        self.0.flush().context("cannot write bodies.csv")
     }
 }

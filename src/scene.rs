@@ -42,6 +42,72 @@ pub struct Scene {
     /// What is written and how often.
     #[serde(default)]
     pub output: Output,
+    /// Rigid bodies: dynamic (two-way coupled), kinematic (prescribed motion) and static
+    /// (walls, tanks). Default: none.
+    #[serde(default)]
+    pub bodies: Vec<BodySpec>,
+    /// Directory that relative mesh paths are resolved against (the scene file's).
+    #[serde(skip)]
+    pub base_dir: std::path::PathBuf,
+}
+
+/// How a body moves.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum BodyKind {
+    /// Moves with the mean motion of the fluid inside it (two-way coupled, eq. 7).
+    Dynamic,
+    /// Never moves (walls, floors, tanks).
+    Static,
+    /// Prescribed motion: velocity(t) = velocity + amplitude sin(2π frequency t), and a constant
+    /// angular velocity.
+    Kinematic {
+        /// Constant part of the velocity, length/time (one entry per axis).
+        velocity: Vec<f64>,
+        /// Angular velocity, rad/time: 1 entry (about z) in 2D, 3 in 3D. Default: zero.
+        #[serde(default)]
+        angular_velocity: Vec<f64>,
+        /// Amplitude of the oscillating part of the velocity, length/time. Default: zero.
+        #[serde(default)]
+        amplitude: Vec<f64>,
+        /// Frequency of the oscillation, 1/time. Default: 0.
+        #[serde(default)]
+        frequency: f64,
+    },
+}
+
+/// A rigid body in the scene.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Name in outputs. Default: `body<index>`.
+    #[serde(default)]
+    pub name: String,
+    /// Shape in body coordinates (centred on the body's position).
+    pub shape: crate::shapes::Shape,
+    /// How it moves. Default: Dynamic.
+    #[serde(default = "default_kind")]
+    pub kind: BodyKind,
+    /// Density, mass per volume, > 0. Default: the fluid's density (neutrally buoyant).
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// Position of the body's centre, length units (one entry per axis).
+    pub position: Vec<f64>,
+    /// Initial orientation as a rotation vector (axis times angle, radians): 1 entry (angle
+    /// about z) in 2D, 3 in 3D. Default: no rotation.
+    #[serde(default)]
+    pub rotation: Vec<f64>,
+    /// Initial velocity of a dynamic body, length/time. Default: zero.
+    #[serde(default)]
+    pub velocity: Vec<f64>,
+    /// Initial angular velocity of a dynamic body (1 entry in 2D, 3 in 3D), rad/time.
+    /// Default: zero.
+    #[serde(default)]
+    pub angular_velocity: Vec<f64>,
+}
+
+fn default_kind() -> BodyKind {
+    BodyKind::Dynamic
 }
 
 /// The box `[origin, origin + extent)`, periodic, with a uniform grid of spacing `h`.
@@ -146,6 +212,13 @@ pub struct Numerics {
     pub midpoint_velocity: bool,
     /// Interpolation and remeshing kernel. Default: `M4Prime` (the paper's eq. 30).
     pub remesh_kernel: RemeshKernel,
+    /// Penalization coefficient λ, 1/time, > 0 (implicit, so any value is stable). Default: 1e6.
+    pub lambda: f64,
+    /// Half-width of the smoothed Heaviside χ = H(φ), in cells (> 0). Default: 1.
+    pub interface_cells: f64,
+    /// Use the Boussinesq form of the baroclinic term, ∇ρ × g / ρ_F (eq. 18), instead of the
+    /// full form (eq. 28). Default: false.
+    pub boussinesq: bool,
 }
 
 /// The kernel that interpolates velocity onto particles and remeshes them.
@@ -168,6 +241,9 @@ impl Default for Numerics {
             blowup_factor: 1e4,
             midpoint_velocity: true,
             remesh_kernel: RemeshKernel::M4Prime,
+            lambda: 1e6,
+            interface_cells: 1.0,
+            boussinesq: false,
         }
     }
 }
@@ -232,6 +308,9 @@ pub enum FieldName {
     Omega,
     /// Velocity.
     Velocity,
+    /// Density ρ (eq. 19), characteristic function Σχ and the union level set max φ_i
+    /// (written only when the scene has bodies).
+    Density,
 }
 
 /// What is written and how often.
@@ -251,7 +330,7 @@ impl Default for Output {
     fn default() -> Self {
         Output {
             every: None,
-            fields: vec![FieldName::Omega, FieldName::Velocity],
+            fields: vec![FieldName::Omega, FieldName::Velocity, FieldName::Density],
             dir: None,
         }
     }
@@ -299,7 +378,9 @@ impl Scene {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        Scene::parse(&text, &file, &stem)
+        let mut scene = Scene::parse(&text, &file, &stem)?;
+        scene.base_dir = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
+        Ok(scene)
     }
 
     /// Parse and validate scene text; `file` names it in errors, `default_name` is used when
@@ -617,6 +698,100 @@ impl Scene {
                     if !circulation.is_finite() {
                         return err(&["initial", "circulation"], "must be finite".into());
                     }
+                }
+            }
+        }
+        if !(n.lambda.is_finite() && n.lambda > 0.0) {
+            return err(
+                &["numerics", "lambda"],
+                format!("must be positive, got {}", n.lambda),
+            );
+        }
+        if !(n.interface_cells.is_finite() && n.interface_cells > 0.0) {
+            return err(
+                &["numerics", "interface_cells"],
+                format!("must be positive, got {}", n.interface_cells),
+            );
+        }
+        let extent = self.domain.extent.clone();
+        let origin = self.domain.origin.clone().unwrap_or(vec![0.0; dim]);
+        let rot_len = if dim == 2 { 1 } else { 3 };
+        for (i, b) in self.bodies.iter_mut().enumerate() {
+            if b.name.is_empty() {
+                b.name = format!("body{i}");
+            }
+            let name = b.name.clone();
+            let berr = |field: &'static str, m: String| {
+                Err((vec!["bodies", field], format!("body `{name}`: {m}")))
+            };
+            if let Err(m) = b.shape.validate(dim) {
+                return berr("shape", m);
+            }
+            if b.position.len() != dim || b.position.iter().any(|x| !x.is_finite()) {
+                return berr("position", format!("needs {dim} finite entries"));
+            }
+            let bounded = !matches!(
+                b.shape,
+                crate::shapes::Shape::HalfSpace { .. } | crate::shapes::Shape::Complement(_)
+            );
+            if bounded {
+                for a in 0..dim {
+                    let x = b.position[a];
+                    if x < origin[a] || x > origin[a] + extent[a] {
+                        return berr(
+                            "position",
+                            format!(
+                                "the centre {:?} is outside the domain [{:?}, {:?}]",
+                                b.position,
+                                origin,
+                                origin
+                                    .iter()
+                                    .zip(&extent)
+                                    .map(|(o, e)| o + e)
+                                    .collect::<Vec<_>>()
+                            ),
+                        );
+                    }
+                }
+            }
+            if let Some(d) = b.density
+                && !(d.is_finite() && d > 0.0)
+            {
+                return berr("density", format!("must be positive, got {d}"));
+            }
+            if !b.rotation.is_empty() && b.rotation.len() != rot_len {
+                return berr(
+                    "rotation",
+                    format!(
+                        "needs {rot_len} entries (a rotation vector), got {}",
+                        b.rotation.len()
+                    ),
+                );
+            }
+            if !b.velocity.is_empty() && b.velocity.len() != dim {
+                return berr("velocity", format!("needs {dim} entries"));
+            }
+            if !b.angular_velocity.is_empty() && b.angular_velocity.len() != rot_len {
+                return berr("angular_velocity", format!("needs {rot_len} entries"));
+            }
+            if let BodyKind::Kinematic {
+                velocity,
+                angular_velocity,
+                amplitude,
+                frequency,
+            } = &b.kind
+            {
+                if velocity.len() != dim {
+                    return berr("velocity", format!("needs {dim} entries"));
+                }
+                if !angular_velocity.is_empty() && angular_velocity.len() != rot_len {
+                    return berr("angular_velocity", format!("needs {rot_len} entries"));
+                }
+                if !amplitude.is_empty() && amplitude.len() != dim {
+                    return berr("amplitude", format!("needs {dim} entries"));
+                }
+                if !(frequency.is_finite() && *frequency >= 0.0) {
+                    return berr("frequency", "must be zero or positive".into());
                 }
             }
         }

@@ -9,7 +9,10 @@
 //! The executor is single-threaded (the systems parallelise inside with rayon) and ambiguous
 //! ordering is an error: two systems that touch the same data must be ordered.
 
-use crate::systems::{diagnostics, diffusion, poisson, transport};
+use crate::systems::{
+    baroclinic, density, diagnostics, diffusion, level_sets, penalization, poisson, rigid_update,
+    rigid_velocity, transport,
+};
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
@@ -82,7 +85,22 @@ fn configured(label: impl ScheduleLabel) -> Schedule {
     s
 }
 
-/// The step schedule with the built-in systems.
+/// The step schedule with the built-in systems; the body systems are added when the scene
+/// has bodies (a pure-fluid run does no body work at all).
+pub fn step_schedule_with(bodies: bool) -> Schedule {
+    let mut s = step_schedule();
+    if bodies {
+        s.add_systems(level_sets::level_sets.in_set(PhysicsSet::LevelSets));
+        s.add_systems(density::density.in_set(PhysicsSet::Density));
+        s.add_systems(rigid_velocity::rigid_velocity.in_set(PhysicsSet::RigidVelocity));
+        s.add_systems(penalization::penalization.in_set(PhysicsSet::Penalization));
+        s.add_systems(baroclinic::baroclinic.in_set(PhysicsSet::Baroclinic));
+        s.add_systems(rigid_update::rigid_update.in_set(PhysicsSet::RigidUpdate));
+    }
+    s
+}
+
+/// The step schedule with the fluid systems.
 pub fn step_schedule() -> Schedule {
     let mut s = configured(Step);
     s.configure_sets(

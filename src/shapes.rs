@@ -32,9 +32,15 @@ pub enum Shape {
     /// 3D ball of the given radius (length) centred at the body origin.
     Sphere { radius: f64 },
     /// 3D ellipsoid with semi-axes `radii` (lengths) along body x, y, z.
-    Ellipsoid { radii: [f64; 3] },
+    Ellipsoid {
+        #[serde(with = "seq_array")]
+        radii: [f64; 3],
+    },
     /// 3D box with half side lengths `half_extents` (lengths) along body x, y, z.
-    Box { half_extents: [f64; 3] },
+    Box {
+        #[serde(with = "seq_array")]
+        half_extents: [f64; 3],
+    },
     /// 3D circular cylinder, axis along body z: `radius` (length), `half_height` (length) = half
     /// the length along z; flat end caps.
     Cylinder { radius: f64, half_height: f64 },
@@ -46,13 +52,23 @@ pub enum Shape {
     /// length, it is normalised) points out of the solid. `offset` is a length when `n` is a
     /// unit vector (in general the plane is at signed distance `offset / |n|` from the origin
     /// along `n`). Valid in 2D if `normal[2] == 0` (a half-plane) and in 3D.
-    HalfSpace { normal: [f64; 3], offset: f64 },
+    HalfSpace {
+        #[serde(with = "seq_array")]
+        normal: [f64; 3],
+        offset: f64,
+    },
     /// 2D disk of the given radius (length).
     Disk { radius: f64 },
     /// 2D ellipse with semi-axes `radii` (lengths) along body x, y.
-    Ellipse { radii: [f64; 2] },
+    Ellipse {
+        #[serde(with = "seq_array")]
+        radii: [f64; 2],
+    },
     /// 2D rectangle with half side lengths `half_extents` (lengths) along body x, y.
-    Rectangle { half_extents: [f64; 2] },
+    Rectangle {
+        #[serde(with = "seq_array")]
+        half_extents: [f64; 2],
+    },
     /// The complement (outside) of a shape: a container. E.g. `Complement(Cylinder(..))` is a
     /// tube wall whose fluid region is the cylinder's interior. Valid in 2D and 3D, as its shape.
     Complement(Box<Shape>),
@@ -938,4 +954,23 @@ fn polyhedron_mass(verts: &[DVec3], idx: &[[u32; 3]]) -> (f64, DMat3) {
     }
     let tr = cov.x_axis.x + cov.y_axis.y + cov.z_axis.z;
     (vol, DMat3::from_diagonal(DVec3::splat(tr)) - cov)
+}
+
+/// Fixed-size arrays read and written as RON lists (`[1.0, 2.0]`), like every other vector in
+/// a scene, instead of serde's default tuples.
+mod seq_array {
+    use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+    pub fn serialize<S: Serializer, const N: usize>(v: &[f64; N], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v.iter())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>, const N: usize>(
+        d: D,
+    ) -> Result<[f64; N], D::Error> {
+        let v = Vec::<f64>::deserialize(d)?;
+        let n = v.len();
+        v.try_into()
+            .map_err(|_| D::Error::custom(format!("expected a list of {N} numbers, got {n}")))
+    }
 }

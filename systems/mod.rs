@@ -3,7 +3,13 @@
 //! Each file opens with the equation it implements and the paper's equation number
 //! (Coquerelle & Cottet, J. Comput. Phys. 227 (2008)).
 
+pub mod baroclinic;
+pub mod density;
 pub mod diagnostics;
 pub mod diffusion;
+pub mod level_sets;
+pub mod penalization;
 pub mod poisson;
+pub mod rigid_update;
+pub mod rigid_velocity;
 pub mod transport;

@@ -1,0 +1,59 @@
+//! # density: characteristic functions and the density field (paper eq. 19)
+//!
+//! ρ = ρ_F (1 - Σ_i χ_i) + Σ_i ρ_i χ_i, with χ_i = H(φ_i) from the level-set system. Static
+//! bodies (walls) count with the fluid's density, so that gravity makes no vorticity at walls.
+//! Also keeps Σχ_i and the union level set max_i φ_i for output.
+
+use crate::bodies::{Body, BodyFields, GridPatch, Material};
+use crate::fields::{Params, SystemTimer, Timings};
+use crate::grid::Grid;
+use bevy_ecs::prelude::*;
+use rayon::prelude::*;
+
+/// The density system.
+pub fn density(
+    grid: Res<Grid>,
+    params: Res<Params>,
+    bodies: Query<(&Body, &Material, &GridPatch)>,
+    mut out: ResMut<BodyFields>,
+    mut timings: ResMut<Timings>,
+) {
+    let timer = SystemTimer::start();
+    let rho_f = params.rho_fluid;
+    let out = &mut *out;
+    out.rho.par_iter_mut().for_each(|r| *r = rho_f);
+    out.chi.par_iter_mut().for_each(|c| *c = 0.0);
+    out.phi.par_iter_mut().for_each(|p| *p = f64::NEG_INFINITY);
+    // Bodies in spawn order, so overlapping patches add up in a fixed order.
+    for (body, mat, patch) in &bodies {
+        let drho = if body.is_static() {
+            0.0
+        } else {
+            mat.density - rho_f
+        };
+        let [dx, dy, _] = patch.dims;
+        if patch.is_empty() {
+            continue;
+        }
+        let rows = patch.len() / dx;
+        let (rho, chi, phi) = (
+            crate::grid::SyncPtr(out.rho.as_mut_ptr()),
+            crate::grid::SyncPtr(out.chi.as_mut_ptr()),
+            crate::grid::SyncPtr(out.phi.as_mut_ptr()),
+        );
+        (0..rows).into_par_iter().for_each(|r| {
+            let (b, c) = (r % dy, r / dy);
+            for a in 0..dx {
+                let g = patch.grid_index(&grid, a, b, c);
+                let l = r * dx + a;
+                // SAFETY: distinct patch rows map to distinct grid nodes.
+                unsafe {
+                    rho.write(g, rho.read(g) + drho * patch.chi[l]);
+                    chi.write(g, chi.read(g) + patch.chi[l]);
+                    phi.write(g, phi.read(g).max(patch.phi[l]));
+                }
+            }
+        });
+    }
+    timer.stop(&mut timings, "density");
+}

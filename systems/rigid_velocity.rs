@@ -1,0 +1,165 @@
+//! # rigid_velocity: the rigid motion of each body from the flow (paper eq. 7)
+//!
+//! ū_i(x) = V_i + Ω_i × (x - x_G), with
+//!   V_i = (1/|S_i|) ∫ χ_i u dx,   Ω_i = J_i⁻¹ ∫ χ_i (x - x_G) × u dx,
+//!   |S_i| = ∫ χ_i dx,   x_G = ∫ χ_i x dx / |S_i|,   J_i = ∫ χ_i (|r|² I - r rᵀ) dx  (r = x - x_G),
+//! all integrated on the grid with the same smoothed χ_i the flow sees, so the body the flow
+//! sees and the body that moves are the same body. In 2D Ω is about z and J_zz = ∫χ|r|².
+//! Kinematic bodies take their prescribed motion; static ones stay at rest. Sums are taken per
+//! patch row and added in row order (thread-count independent).
+
+use crate::bodies::{Body, GridPatch, RigidState, kinematic_velocity};
+use crate::fields::{Fields, SimTime, SystemTimer, Timings};
+use crate::grid::Grid;
+use bevy_ecs::prelude::*;
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+
+/// Per-row partial sums (preallocated, so a step allocates nothing).
+#[derive(Resource, Debug, Clone)]
+pub struct BodySums {
+    rows: Vec<[f64; 16]>,
+}
+
+impl BodySums {
+    /// The row buffer (for other systems that sum over patches).
+    pub fn rows_mut(&mut self) -> &mut [[f64; 16]] {
+        &mut self.rows
+    }
+
+    /// Room for the largest patch of `grid` (ny nz rows).
+    pub fn new(grid: &Grid) -> Self {
+        BodySums {
+            rows: vec![[0.0; 16]; grid.n[1] * grid.n[2]],
+        }
+    }
+}
+
+/// Integrals of χ over a body's patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r measured
+/// from the centroid.
+pub fn integrate(
+    grid: &Grid,
+    patch: &GridPatch,
+    center: DVec3,
+    u: &[Vec<f64>],
+    sums: &mut BodySums,
+) -> (f64, DVec3, DVec3, DVec3, DMat3) {
+    let [dx, dy, _] = patch.dims;
+    if patch.is_empty() {
+        return (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
+    }
+    let rows = patch.len() / dx;
+    let dv = grid.cell_volume();
+    let dim = grid.dim;
+    sums.rows[..rows]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(r, acc)| {
+            let (b, c) = (r % dy, r / dy);
+            let mut s = [0.0; 16];
+            for a in 0..dx {
+                let chi = patch.chi[r * dx + a];
+                if chi == 0.0 {
+                    continue;
+                }
+                let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
+                let g = grid.idx(i, j, k);
+                let p = grid.pos(i, j, k);
+                let rv = DVec3::new(p[0], p[1], p[2]) - center;
+                let uv = DVec3::new(u[0][g], u[1][g], if dim == 3 { u[2][g] } else { 0.0 });
+                let m = rv.cross(uv);
+                s[0] += chi;
+                s[1] += chi * uv.x;
+                s[2] += chi * uv.y;
+                s[3] += chi * uv.z;
+                s[4] += chi * m.x;
+                s[5] += chi * m.y;
+                s[6] += chi * m.z;
+                s[7] += chi * rv.x * rv.x;
+                s[8] += chi * rv.y * rv.y;
+                s[9] += chi * rv.z * rv.z;
+                s[10] += chi * rv.x * rv.y;
+                s[11] += chi * rv.x * rv.z;
+                s[12] += chi * rv.y * rv.z;
+                s[13] += chi * rv.x;
+                s[14] += chi * rv.y;
+                s[15] += chi * rv.z;
+            }
+            *acc = s;
+        });
+    let mut t = [0.0; 16];
+    for s in &sums.rows[..rows] {
+        for q in 0..16 {
+            t[q] += s[q];
+        }
+    }
+    for v in &mut t {
+        *v *= dv;
+    }
+    let vol = t[0];
+    if vol <= 0.0 {
+        return (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
+    }
+    // Shift the moments from the centre c to the centroid x_G = c + d.
+    let d = DVec3::new(t[13], t[14], t[15]) / vol;
+    let mom = DVec3::new(t[1], t[2], t[3]);
+    let ang = DVec3::new(t[4], t[5], t[6]) - d.cross(mom);
+    let (xx, yy, zz) = (
+        t[7] - vol * d.x * d.x,
+        t[8] - vol * d.y * d.y,
+        t[9] - vol * d.z * d.z,
+    );
+    let (xy, xz, yz) = (
+        t[10] - vol * d.x * d.y,
+        t[11] - vol * d.x * d.z,
+        t[12] - vol * d.y * d.z,
+    );
+    let j = DMat3::from_cols(
+        DVec3::new(yy + zz, -xy, -xz),
+        DVec3::new(-xy, xx + zz, -yz),
+        DVec3::new(-xz, -yz, xx + yy),
+    );
+    (vol, center + d, mom, ang, j)
+}
+
+/// The rigid-velocity system.
+pub fn rigid_velocity(
+    grid: Res<Grid>,
+    time: Res<SimTime>,
+    fields: Res<Fields>,
+    mut sums: ResMut<BodySums>,
+    mut bodies: Query<(&Body, &GridPatch, &mut RigidState)>,
+    mut timings: ResMut<Timings>,
+) {
+    let timer = SystemTimer::start();
+    for (body, patch, mut state) in &mut bodies {
+        if body.is_static() {
+            state.velocity = DVec3::ZERO;
+            state.angular_velocity = DVec3::ZERO;
+            continue;
+        }
+        let (vol, centroid, mom, ang, j) =
+            integrate(&grid, patch, state.center, &fields.u, &mut sums);
+        state.volume = vol;
+        state.centroid = centroid;
+        state.inertia = j;
+        if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {
+            state.velocity = v;
+            state.angular_velocity = w;
+            continue;
+        }
+        if vol <= 0.0 {
+            continue;
+        }
+        state.velocity = mom / vol;
+        state.angular_velocity = if grid.dim == 2 {
+            let jz = j.z_axis.z;
+            DVec3::new(0.0, 0.0, if jz > 0.0 { ang.z / jz } else { 0.0 })
+        } else if j.determinant().abs() > 0.0 {
+            j.inverse() * ang
+        } else {
+            DVec3::ZERO
+        };
+    }
+    timer.stop(&mut timings, "rigid_velocity");
+}
