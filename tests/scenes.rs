@@ -12,10 +12,20 @@ fn every_bundled_scene_loads_and_steps() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "ron") {
             let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-            // One step at a small size: the scene's setup works end to end.
-            let dim = scene.dim();
-            scene.domain.cells = Some(vec![16; dim]);
-            scene.domain.h = None;
+            // One step at a small size: the scene's setup works end to end. Coarsen h by the
+            // largest whole factor that keeps every extent a whole number (≥ 8) of cells.
+            let h0 = scene.grid().h;
+            let m = (1..=64)
+                .rev()
+                .find(|&m| {
+                    scene.domain.extent.iter().all(|e| {
+                        let c = e / (h0 * m as f64);
+                        (c - c.round()).abs() < 1e-6 && c.round() >= 8.0
+                    })
+                })
+                .unwrap_or(1);
+            scene.domain.cells = None;
+            scene.domain.h = Some(h0 * m as f64);
             let mut sim =
                 Simulation::new(scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             sim.step().unwrap();
