@@ -1274,7 +1274,7 @@ fn ron_syntax() {
             scale: 1.0
         }
     );
-    let s: Shape = ron::from_str("Box(half_extents: (0.1, 0.2, 0.3))").unwrap();
+    let s: Shape = ron::from_str("Box(half_extents: [0.1, 0.2, 0.3])").unwrap();
     assert_eq!(
         s,
         Shape::Box {
