@@ -274,7 +274,7 @@ fn bench(mut scene: Scene, steps: usize, warmup: usize) -> anyhow::Result<String
         "scene": name,
         "cells": g.len(),
         "grid": &g.n[..g.dim],
-        "bodies": 0,
+        "bodies": sim.scene().bodies.len(),
         "steps": steps,
         "threads": rayon::current_num_threads(),
         "median_s_per_step": med,

@@ -19,6 +19,8 @@ pub const CASES: &[&str] = &[
     "lamb-oseen",
     "taylor-green-2d",
     "taylor-green-3d",
+    "sedimentation-2d",
+    "sphere-settling",
 ];
 
 /// The bundled scenes, by file name (so validation runs from any directory).
@@ -33,6 +35,14 @@ pub const SCENES: &[(&str, &str)] = &[
         include_str!("../scenes/taylor-green-3d.ron"),
     ),
     ("vortex-ring.ron", include_str!("../scenes/vortex-ring.ron")),
+    (
+        "sedimentation-2d.ron",
+        include_str!("../scenes/sedimentation-2d.ron"),
+    ),
+    (
+        "sphere-settling.ron",
+        include_str!("../scenes/sphere-settling.ron"),
+    ),
 ];
 
 /// A bundled scene by file name.
@@ -162,6 +172,8 @@ pub fn run_case(case: &str, quick: bool) -> anyhow::Result<Report> {
         "lamb-oseen" => lamb_oseen(quick),
         "taylor-green-2d" => taylor_green_2d(quick),
         "taylor-green-3d" => taylor_green_3d(quick),
+        "sedimentation-2d" => sedimentation_2d(quick),
+        "sphere-settling" => sphere_settling(quick),
         _ => anyhow::bail!(
             "unknown validation case `{case}`; the cases are: {}",
             CASES.join(", ")
@@ -516,6 +528,204 @@ fn taylor_green_3d(quick: bool) -> anyhow::Result<Report> {
     if quick {
         rep.notes
             .push("quick: 48^3 only, with the 2% tolerance the case sets for 128^3".into());
+    }
+    Ok(rep)
+}
+
+/// The state of the first dynamic body.
+fn dynamic_body(sim: &mut Simulation) -> Option<crate::bodies::RigidState> {
+    let mut q = sim
+        .world
+        .query::<(&crate::bodies::Body, &crate::bodies::RigidState)>();
+    q.iter(&sim.world)
+        .find(|(b, _)| b.is_dynamic())
+        .map(|(_, s)| *s)
+}
+
+/// One sedimentation-2d run at spacing `h` and step `dt`: (max fall speed, deepest point of
+/// the disk below the cavity floor, max relative deviation from rigid motion of the vertical
+/// velocity across the disk during the fall, error if the run stopped).
+fn sedimentation_run(h: f64, dt: f64) -> anyhow::Result<(f64, f64, f64, Option<String>)> {
+    let mut scene = bundled_scene("sedimentation-2d.ron")?;
+    let wall = 8.0 * h;
+    scene.domain.origin = Some(vec![-wall, -wall]);
+    scene.domain.extent = vec![2.0 + 2.0 * wall, 6.0 + 2.0 * wall];
+    scene.domain.h = Some(h);
+    scene.domain.cells = None;
+    scene.numerics.dt = crate::scene::TimeStep::Fixed(dt);
+    let r = 0.125;
+    let mut sim = Simulation::new(scene)?;
+    let (mut vmax, mut ymin, mut dev) = (0.0f64, f64::INFINITY, 0.0f64);
+    let mut failure = None;
+    let mut t_contact = None;
+    sim.set_stop_at(Some(1.2));
+    while sim.time() < 1.2 - 1e-12 {
+        if let Err(e) = sim.step() {
+            failure = Some(e.to_string());
+            break;
+        }
+        let Some(st) = dynamic_body(&mut sim) else {
+            break;
+        };
+        vmax = vmax.max(-st.velocity.y);
+        ymin = ymin.min(st.center.y - r);
+        if t_contact.is_none() && st.center.y - r < 2.0 * h {
+            t_contact = Some(sim.time());
+        }
+        if t_contact.is_some_and(|tc| sim.time() > tc + 0.3) {
+            break;
+        }
+        // Rigidity during the fall (disk well away from the floor): on the horizontal line
+        // through the centre, nodes at least one cell inside the disk.
+        if st.center.y > 1.0 && st.velocity.y < -1.0 && sim.steps() % 20 == 0 {
+            let g = sim.grid().clone();
+            let u = &sim.fields().u;
+            let j = ((st.center.y - g.origin[1]) / g.h).round() as usize;
+            for i in 0..g.n[0] {
+                let x = g.pos(i, j, 0);
+                let d = ((x[0] - st.center.x).powi(2) + (x[1] - st.center.y).powi(2)).sqrt();
+                if d < r - g.h {
+                    let uy = u[1][g.idx(i, j, 0)];
+                    dev = dev.max(((uy - st.velocity.y) / st.velocity.y).abs());
+                }
+            }
+        }
+    }
+    Ok((vmax, ymin, dev, failure))
+}
+
+/// Paper section 4.1: a 2D disk settling in a cavity onto its floor.
+fn sedimentation_2d(quick: bool) -> anyhow::Result<Report> {
+    let mut rep = Report::new("sedimentation-2d");
+    let runs: &[(f64, f64)] = if quick {
+        &[(1.0 / 64.0, 3e-3), (1.0 / 96.0, 2e-3)]
+    } else {
+        &[(1.0 / 256.0, 7.5e-4), (1.0 / 384.0, 5e-4)]
+    };
+    let mut res = Vec::new();
+    for &(h, dt) in runs {
+        let (vmax, ymin, dev, failure) = sedimentation_run(h, dt)?;
+        rep.notes.push(format!(
+            "h = 1/{:.0}, dt = {dt}: max fall velocity {vmax:.4}, lowest point of the disk {ymin:.4}, max deviation from rigid motion across the disk during the fall {:.2}% (paper, Fig. 2: about 2% at h = 1/512){}",
+            1.0 / h,
+            100.0 * dev,
+            failure.map(|f| format!("; stopped: {f}")).unwrap_or_default()
+        ));
+        rep.rows.push(Row::abs(
+            format!("h = 1/{:.0}: depth of the disk below the floor", 1.0 / h),
+            0.0,
+            (-ymin).max(0.0),
+            h,
+        ));
+        res.push(vmax);
+    }
+    rep.rows.push(Row::rel(
+        "max fall velocity, finer grid against coarser",
+        res[0],
+        res[1],
+        0.02,
+    ));
+    Ok(rep)
+}
+
+/// One sphere-settling run: terminal velocity (downwards) at t = 1.2.
+fn settling_run(h: f64, d: f64, nu: f64) -> anyhow::Result<f64> {
+    let mut scene = bundled_scene("sphere-settling.ron")?;
+    let wall = 2.0 * h;
+    scene.domain.origin = Some(vec![-wall, -wall, 0.0]);
+    scene.domain.extent = vec![1.0 + 2.0 * wall, 1.0 + 2.0 * wall, 4.0];
+    scene.domain.h = Some(h);
+    scene.domain.cells = None;
+    scene.fluid.viscosity = nu;
+    for b in &mut scene.bodies {
+        match &mut b.shape {
+            crate::shapes::Shape::Sphere { radius } => *radius = 0.5 * d,
+            crate::shapes::Shape::Complement(inner) => {
+                **inner = crate::shapes::Shape::Cylinder {
+                    radius: 0.5,
+                    half_height: 2.0 - wall,
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut sim = Simulation::new(scene)?;
+    sim.run_until(1.2, |_| {})?;
+    let st = dynamic_body(&mut sim).ok_or_else(|| anyhow::anyhow!("no sphere"))?;
+    Ok(-st.velocity.z)
+}
+
+/// Paper section 4.2.1, Table 1: terminal velocities of spheres settling in a tube.
+fn sphere_settling(quick: bool) -> anyhow::Result<Report> {
+    let mut rep = Report::new("sphere-settling");
+    // (d, ν, U_E experimental, U at h = 1/64 from the paper)
+    let table: &[(f64, f64, f64, f64)] = &[
+        (0.2, 0.10, 0.2571, 0.256),
+        (0.2, 0.05, 0.4603, 0.475),
+        (0.2, 0.02, 0.9129, 0.937),
+        (0.3, 0.10, 0.4047, 0.401),
+        (0.3, 0.05, 0.7493, 0.748),
+        (0.3, 0.02, 1.4359, 1.39),
+    ];
+    let cases: Vec<_> = if quick {
+        vec![table[3]]
+    } else {
+        table.to_vec()
+    };
+    let h = 1.0 / 64.0;
+    let mut u64_d3_nu02 = None;
+    for (d, nu, ue, up) in cases {
+        let u = settling_run(h, d, nu)?;
+        if d == 0.3 && nu == 0.02 {
+            u64_d3_nu02 = Some(u);
+        }
+        rep.rows.push(Row::rel(
+            format!("d = {d}, ν = {nu}: U(t = 1.2) at h = 1/64 vs paper"),
+            up,
+            u,
+            0.04,
+        ));
+        rep.notes.push(format!(
+            "d = {d}, ν = {nu}: U = {u:.4}; experiment U_E = {ue} (error {:.1}%)",
+            100.0 * (u - ue) / ue
+        ));
+    }
+    if !quick {
+        let mut us = Vec::new();
+        for n in [32.0, 48.0] {
+            us.push((1.0 / n, settling_run(1.0 / n, 0.3, 0.02)?));
+        }
+        if let Some(u) = u64_d3_nu02 {
+            us.push((1.0 / 64.0, u));
+        }
+        us.push((1.0 / 96.0, settling_run(1.0 / 96.0, 0.3, 0.02)?));
+        let monotone = us.windows(3).all(|w| {
+            let (a, b) = (w[1].1 - w[0].1, w[2].1 - w[1].1);
+            a * b > 0.0 && b.abs() < a.abs()
+        });
+        // First-order Richardson extrapolation from the two finest grids.
+        let (h1, u1) = us[us.len() - 2];
+        let (h2, u2) = us[us.len() - 1];
+        let extrap = u2 + (u2 - u1) * h2 / (h1 - h2);
+        rep.rows.push(Row::rel(
+            "d = 0.3, ν = 0.02: extrapolated U (h → 0) vs paper",
+            1.51,
+            extrap,
+            0.05,
+        ));
+        rep.rows.push(Row::abs(
+            "grid study 1/32, 1/48, 1/64, 1/96 converges monotonically (1 = yes)",
+            1.0,
+            if monotone { 1.0 } else { 0.0 },
+            0.0,
+        ));
+        rep.notes.push(format!(
+            "grid study d = 0.3, ν = 0.02: {}",
+            us.iter()
+                .map(|(h, u)| format!("h = 1/{:.0}: {u:.4}", 1.0 / h))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
     }
     Ok(rep)
 }
