@@ -3,13 +3,15 @@
 //! ū_i(x) = V_i + Ω_i × (x - x_G), with
 //!   V_i = (1/|S_i|) ∫ χ_i u dx,   Ω_i = J_i⁻¹ ∫ χ_i (x - x_G) × u dx,
 //!   |S_i| = ∫ χ_i dx,   x_G = ∫ χ_i x dx / |S_i|,   J_i = ∫ χ_i (|r|² I - r rᵀ) dx  (r = x - x_G),
-//! all integrated on the grid with the same smoothed χ_i the flow sees, so the body the flow
-//! sees and the body that moves are the same body. In 2D Ω is about z and J_zz = ∫χ|r|².
+//! integrated on the grid. The averages that give V_i and Ω_i use the weights the implicit
+//! penalization actually applies, w_i = λΔtχ_i/(1 + λΔtχ_i) in place of χ_i, so that the body
+//! that moves is exactly the body the flow is forced to move with, and penalizing towards ū_i
+//! conserves momentum; the volume and inertia reported are those of χ_i. In 2D Ω is about z and J_zz = ∫χ|r|².
 //! Kinematic bodies take their prescribed motion; static ones stay at rest. Sums are taken per
 //! patch row and added in row order (thread-count independent).
 
 use crate::bodies::{Body, GridPatch, RigidState, kinematic_velocity};
-use crate::fields::{Fields, SimTime, SystemTimer, Timings};
+use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
 use crate::grid::Grid;
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
@@ -43,6 +45,7 @@ pub fn integrate(
     center: DVec3,
     u: &[Vec<f64>],
     sums: &mut BodySums,
+    weight: impl Fn(f64) -> f64 + Sync,
 ) -> (f64, DVec3, DVec3, DVec3, DMat3) {
     let [dx, dy, _] = patch.dims;
     if patch.is_empty() {
@@ -58,7 +61,7 @@ pub fn integrate(
             let (b, c) = (r % dy, r / dy);
             let mut s = [0.0; 16];
             for a in 0..dx {
-                let chi = patch.chi[r * dx + a];
+                let chi = weight(patch.chi[r * dx + a]);
                 if chi == 0.0 {
                     continue;
                 }
@@ -125,6 +128,7 @@ pub fn integrate(
 /// The rigid-velocity system.
 pub fn rigid_velocity(
     grid: Res<Grid>,
+    params: Res<Params>,
     time: Res<SimTime>,
     fields: Res<Fields>,
     mut sums: ResMut<BodySums>,
@@ -138,8 +142,9 @@ pub fn rigid_velocity(
             state.angular_velocity = DVec3::ZERO;
             continue;
         }
-        let (vol, centroid, mom, ang, j) =
-            integrate(&grid, patch, state.center, &fields.u, &mut sums);
+        // Mass properties from χ (the body the density field carries).
+        let (vol, centroid, _, _, j) =
+            integrate(&grid, patch, state.center, &fields.u, &mut sums, |c| c);
         state.volume = vol;
         state.centroid = centroid;
         state.inertia = j;
@@ -151,6 +156,21 @@ pub fn rigid_velocity(
         if vol <= 0.0 {
             continue;
         }
+        // The rigid velocity is the mean over exactly the weights the implicit penalization
+        // applies, w = λΔtχ/(1 + λΔtχ), so that penalizing towards it adds no momentum to the
+        // flow. (With the χ-weighted mean, the outer half of the interface band, where χ is
+        // small but λΔtχ ≫ 1, is dragged along at ū every step: momentum from nothing that
+        // made a settling sphere fall ~50% too fast.)
+        let ldt = params.lambda * time.dt;
+        let (wvol, wcentroid, mom, ang, wj) =
+            integrate(&grid, patch, state.center, &fields.u, &mut sums, |c| {
+                ldt * c / (1.0 + ldt * c)
+            });
+        if wvol <= 0.0 {
+            continue;
+        }
+        state.centroid = wcentroid;
+        let (vol, j) = (wvol, wj);
         state.velocity = mom / vol;
         state.angular_velocity = if grid.dim == 2 {
             let jz = j.z_axis.z;
