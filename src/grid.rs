@@ -113,3 +113,12 @@ impl<T> SyncPtr<T> {
         unsafe { *self.0.add(i) }
     }
 }
+
+/// Shared pointers to the (up to three) components of a vector field, for rayon tasks that
+/// write disjoint nodes; missing components are null and must not be used.
+pub fn component_ptrs(field: &mut [Vec<f64>]) -> [SyncPtr<f64>; 3] {
+    std::array::from_fn(|c| match field.get_mut(c) {
+        Some(v) => SyncPtr(v.as_mut_ptr()),
+        None => SyncPtr(std::ptr::null_mut()),
+    })
+}

@@ -103,24 +103,10 @@ pub fn step_schedule_with(bodies: bool) -> Schedule {
 /// The step schedule with the fluid systems.
 pub fn step_schedule() -> Schedule {
     let mut s = configured(Step);
-    s.configure_sets(
-        (
-            PhysicsSet::First,
-            PhysicsSet::LevelSets,
-            PhysicsSet::Density,
-            PhysicsSet::Collision,
-            PhysicsSet::RigidVelocity,
-            PhysicsSet::Penalization,
-            PhysicsSet::Baroclinic,
-            PhysicsSet::Transport,
-            PhysicsSet::Diffusion,
-            PhysicsSet::Poisson,
-            PhysicsSet::RigidUpdate,
-            PhysicsSet::Diagnostics,
-            PhysicsSet::Last,
-        )
-            .chain(),
-    );
+    // Chained once, in the order of `PhysicsSet::ALL`.
+    for pair in PhysicsSet::ALL.windows(2) {
+        s.configure_sets(pair[0].before(pair[1]));
+    }
     s.add_systems(transport::transport.in_set(PhysicsSet::Transport));
     s.add_systems(diffusion::diffusion.in_set(PhysicsSet::Diffusion));
     s.add_systems(poisson::poisson.in_set(PhysicsSet::Poisson));

@@ -630,7 +630,14 @@ fn sedimentation_2d(quick: bool) -> anyhow::Result<Report> {
 
 /// One sphere-settling run: terminal velocity (downwards) at t = 1.2.
 fn settling_run(h: f64, d: f64, nu: f64) -> anyhow::Result<f64> {
+    settling_run_with(h, d, nu, None)
+}
+
+/// A sphere-settling run, optionally with the sphere replaced by a mesh file (relative to
+/// `scenes/`).
+fn settling_run_with(h: f64, d: f64, nu: f64, mesh: Option<&str>) -> anyhow::Result<f64> {
     let mut scene = bundled_scene("sphere-settling.ron")?;
+    scene.base_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let wall = 2.0 * h;
     scene.domain.origin = Some(vec![-wall, -wall, 0.0]);
     scene.domain.extent = vec![1.0 + 2.0 * wall, 1.0 + 2.0 * wall, 4.0];
@@ -639,7 +646,15 @@ fn settling_run(h: f64, d: f64, nu: f64) -> anyhow::Result<f64> {
     scene.fluid.viscosity = nu;
     for b in &mut scene.bodies {
         match &mut b.shape {
-            crate::shapes::Shape::Sphere { radius } => *radius = 0.5 * d,
+            crate::shapes::Shape::Sphere { radius } => {
+                *radius = 0.5 * d;
+                if let Some(file) = mesh {
+                    b.shape = crate::shapes::Shape::Mesh {
+                        file: file.to_string(),
+                        scale: 1.0,
+                    };
+                }
+            }
             crate::shapes::Shape::Complement(inner) => {
                 **inner = crate::shapes::Shape::Cylinder {
                     radius: 0.5,
@@ -699,6 +714,16 @@ fn sphere_settling(quick: bool) -> anyhow::Result<Report> {
             us.push((1.0 / 64.0, u));
         }
         us.push((1.0 / 96.0, settling_run(1.0 / 96.0, 0.3, 0.02)?));
+        // The icosphere mesh (radius 0.15) against the analytic sphere of the same size.
+        if let Some(u) = u64_d3_nu02 {
+            let um = settling_run_with(h, 0.3, 0.02, Some("meshes/icosphere.obj"))?;
+            rep.rows.push(Row::rel(
+                "d = 0.3, ν = 0.02: mesh icosphere U vs analytic sphere U",
+                u,
+                um,
+                0.02,
+            ));
+        }
         let monotone = us.windows(3).all(|w| {
             let (a, b) = (w[1].1 - w[0].1, w[2].1 - w[1].1);
             a * b > 0.0 && b.abs() < a.abs()

@@ -47,14 +47,7 @@ pub fn baroclinic(
     let u_prev = std::mem::take(&mut fields.u_prev);
     let omega = fields.omega_mut();
     // One task per row; each writes only its own row of ω.
-    let nc = omega.len();
-    let ptrs: [crate::grid::SyncPtr<f64>; 3] = std::array::from_fn(|c| {
-        if c < nc {
-            crate::grid::SyncPtr(omega[c].as_mut_ptr())
-        } else {
-            crate::grid::SyncPtr(std::ptr::null_mut())
-        }
-    });
+    let ptrs = crate::grid::component_ptrs(omega);
     (0..ny * nz).into_par_iter().for_each(|row| {
         let (j, k) = (row % ny, row / ny);
         let (jm, jp) = nb(j, ny);

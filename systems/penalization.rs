@@ -16,7 +16,7 @@
 
 use crate::bodies::{Body, BodyFields, GridPatch, Hydro, RigidState};
 use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::grid::{Grid, SyncPtr};
+use crate::grid::{Grid, component_ptrs};
 use crate::systems::rigid_velocity::BodySums;
 use bevy_ecs::prelude::*;
 use glam::DVec3;
@@ -57,20 +57,8 @@ pub fn penalization(
                 continue;
             }
             let rows = patch.len() / dx;
-            let u: [SyncPtr<f64>; 3] = std::array::from_fn(|c| {
-                if c < dim {
-                    SyncPtr(fields.u[c].as_mut_ptr())
-                } else {
-                    SyncPtr(std::ptr::null_mut())
-                }
-            });
-            let du: [SyncPtr<f64>; 3] = std::array::from_fn(|c| {
-                if c < dim {
-                    SyncPtr(bf.du[c].as_mut_ptr())
-                } else {
-                    SyncPtr(std::ptr::null_mut())
-                }
-            });
+            let u = component_ptrs(&mut fields.u);
+            let du = component_ptrs(&mut bf.du);
             let rho = &bf.rho;
             let st = *state;
             sums.rows_mut()[..rows]

@@ -30,7 +30,7 @@
 //! where it is (circulation is kept; the error is of the size of the cutoff).
 
 use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::grid::{Grid, SyncPtr};
+use crate::grid::{Grid, component_ptrs};
 use crate::kernels::{lambda42_weights, m4prime_weights, split};
 use crate::scene::RemeshKernel;
 use bevy_ecs::prelude::*;
@@ -283,13 +283,7 @@ pub fn sweep(
     let nx = grid.n[0];
     let nlines = grid.len() / n;
     let nc = omega.len();
-    let ptrs: [SyncPtr<f64>; 3] = std::array::from_fn(|c| {
-        if c < nc {
-            SyncPtr(omega[c].as_mut_ptr())
-        } else {
-            SyncPtr(std::ptr::null_mut())
-        }
-    });
+    let ptrs = component_ptrs(omega);
     // Groups of lines: along x each line is its own group; across x, up to LANES lines with
     // consecutive i (and so consecutive memory) form a group.
     let lanes = if axis == 0 { 1 } else { LANES.min(nx) };
