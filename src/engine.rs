@@ -94,8 +94,14 @@ impl Simulation {
         let policy = self.world.resource::<Params>().dt_policy.clone();
         let h = self.grid().h;
         let diag = self.world.resource::<Diagnostics>();
-        let dt =
-            crate::systems::diagnostics::allowed_dt(&policy, &diag.sample, h, diag.dt_fallback);
+        let viscous = self.world.resource::<Params>().viscous_rate(h);
+        let dt = crate::systems::diagnostics::allowed_dt(
+            &policy,
+            &diag.sample,
+            h,
+            diag.dt_fallback,
+            viscous,
+        );
         let mut time = self.world.resource_mut::<SimTime>();
         time.stop_at = t;
         time.dt = crate::systems::diagnostics::land_on(time.t, dt, t);

@@ -94,9 +94,16 @@ pub struct Params {
     pub interface_cells: f64,
     /// Boussinesq form of the baroclinic term.
     pub boussinesq: bool,
+    /// Whether the scene has bodies.
+    pub has_bodies: bool,
 }
 
 impl Params {
+    /// ν/h² when the scene has bodies (the diffusion-number bound applies), else 0.
+    pub fn viscous_rate(&self, h: f64) -> f64 {
+        if self.has_bodies { self.nu / (h * h) } else { 0.0 }
+    }
+
     /// Parameters of a (validated) scene.
     pub fn from_scene(scene: &Scene) -> Self {
         Params {
@@ -112,6 +119,7 @@ impl Params {
             lambda: scene.numerics.lambda,
             interface_cells: scene.numerics.interface_cells,
             boussinesq: scene.numerics.boussinesq,
+            has_bodies: !scene.bodies.is_empty(),
         }
     }
 }

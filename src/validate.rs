@@ -683,7 +683,7 @@ fn sphere_settling(quick: bool) -> anyhow::Result<Report> {
         (0.3, 0.02, 1.4359, 1.39),
     ];
     let cases: Vec<_> = if quick {
-        vec![table[3]]
+        vec![table[5]]
     } else {
         table.to_vec()
     };

@@ -2,7 +2,7 @@
 //!
 //! Closes a step: advances the clock, measures the state and chooses the next step
 //!
-//!   Δt = min(C / max|ω|, Δt_max, CFL h / max|u|)
+//!   Δt = min(C / max|ω|, Δt_max, CFL h / max|u|, D h²/ν (only with bodies))
 //!
 //! (the paper's Δt = C / max|ω| keeps particles from crossing, dt |∇u| < 1), shortened to land
 //! exactly on the next output or end time. It records kinetic energy ½⟨|u|²⟩, enstrophy
@@ -124,11 +124,20 @@ impl Diagnostics {
 }
 
 /// The step the policy allows for this state, before landing on the next stop time.
-pub fn allowed_dt(policy: &TimeStep, sample: &Sample, h: f64, fallback: f64) -> f64 {
+/// `viscous` is ν/h² when the scene has bodies (for the diffusion-number bound), else 0.
+pub fn allowed_dt(policy: &TimeStep, sample: &Sample, h: f64, fallback: f64, viscous: f64) -> f64 {
     match *policy {
         TimeStep::Fixed(dt) => dt,
-        TimeStep::Adaptive { c, dt_max, cfl } => {
+        TimeStep::Adaptive {
+            c,
+            dt_max,
+            cfl,
+            diffusion_number,
+        } => {
             let mut dt = f64::INFINITY;
+            if viscous > 0.0 {
+                dt = dt.min(diffusion_number / viscous);
+            }
             if sample.max_omega > 0.0 {
                 dt = dt.min(c / sample.max_omega);
             }
@@ -192,7 +201,13 @@ pub fn diagnostics_init(
         ));
     }
     diag.sample = s;
-    let dt = allowed_dt(&params.dt_policy, &s, grid.h, diag.dt_fallback);
+    let dt = allowed_dt(
+        &params.dt_policy,
+        &s,
+        grid.h,
+        diag.dt_fallback,
+        params.viscous_rate(grid.h),
+    );
     time.dt = land_on(time.t, dt, time.stop_at);
 }
 
@@ -237,7 +252,13 @@ pub fn diagnostics(
         ));
     }
     diag.sample = s;
-    let dt = allowed_dt(&params.dt_policy, &s, grid.h, diag.dt_fallback);
+    let dt = allowed_dt(
+        &params.dt_policy,
+        &s,
+        grid.h,
+        diag.dt_fallback,
+        params.viscous_rate(grid.h),
+    );
     time.dt = land_on(time.t, dt, time.stop_at);
     timer.stop(&mut timings, "diagnostics");
 }

@@ -38,3 +38,9 @@ fn taylor_green_3d_energy() {
 fn unknown_case_is_an_error() {
     assert!(run_case("no-such-case", true).is_err());
 }
+
+#[test]
+fn sphere_settling_terminal_velocity_at_h_1_64() {
+    // Paper Table 1, d = 0.3, ν = 0.02 at h = 1/64 (about a minute).
+    check("sphere-settling");
+}
