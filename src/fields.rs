@@ -101,7 +101,11 @@ pub struct Params {
 impl Params {
     /// ν/h² when the scene has bodies (the diffusion-number bound applies), else 0.
     pub fn viscous_rate(&self, h: f64) -> f64 {
-        if self.has_bodies { self.nu / (h * h) } else { 0.0 }
+        if self.has_bodies {
+            self.nu / (h * h)
+        } else {
+            0.0
+        }
     }
 
     /// Parameters of a (validated) scene.
