@@ -165,6 +165,23 @@ fn main() -> ExitCode {
             for i in &scene.initial {
                 println!("    {i:?}");
             }
+            println!("  bodies: {}", scene.bodies.len());
+            for b in &scene.bodies {
+                let kind = match &b.kind {
+                    tumble::scene::BodyKind::Dynamic => "dynamic".to_string(),
+                    tumble::scene::BodyKind::Static => "static".to_string(),
+                    k => format!("{k:?}"),
+                };
+                let density = b.density.map_or("fluid's".to_string(), |d| format!("{d}"));
+                println!(
+                    "    `{}`: {} {:?} at {:?}, density {density}",
+                    b.name, kind, b.shape, b.position
+                );
+                if let Err(e) = b.shape.build(&scene.base_dir) {
+                    eprintln!("error: body `{}`: {e}", b.name);
+                    return ExitCode::from(2);
+                }
+            }
             let mem = (g.len() * (2 * g.omega_components() + g.dim) * 8) as f64 / 1e6;
             println!("  field memory about {mem:.0} MB (plus FFT buffers)");
             ExitCode::SUCCESS

@@ -174,3 +174,25 @@ fn validate_unknown_case_fails() {
         .unwrap();
     assert!(!st.status.success());
 }
+
+#[test]
+fn check_rejects_a_missing_mesh_with_status_2() {
+    let d = tmp("mesh");
+    let scene = d.join("m.ron");
+    std::fs::write(
+        &scene,
+        r#"Scene(
+    domain: (extent: [1.0, 1.0, 1.0], cells: [16, 16, 16]),
+    bodies: [(name: "cup", shape: Mesh(file: "cup.obj"), position: [0.5, 0.5, 0.5])],
+)"#,
+    )
+    .unwrap();
+    let st = tumble()
+        .args(["check", scene.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(st.status.code(), Some(2));
+    let msg = String::from_utf8_lossy(&st.stderr);
+    assert!(msg.contains("cup") && msg.contains("not found"), "{msg}");
+    let _ = std::fs::remove_dir_all(&d);
+}
