@@ -393,6 +393,29 @@ impl Scene {
             .unwrap_or_default();
         let mut scene = Scene::parse(&text, &file, &stem)?;
         scene.base_dir = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
+        // Mesh files are read now, so a missing or broken mesh is a scene error with its line.
+        for (i, b) in scene.bodies.iter().enumerate() {
+            if let Err(e) = b.shape.build(&scene.base_dir) {
+                // The i-th `shape:` key belongs to the i-th body.
+                let mut from = 0;
+                let mut pos = None;
+                for _ in 0..=i {
+                    match find_key(&text[from..], "shape") {
+                        Some(off) => {
+                            pos = Some(from + off);
+                            from += off + 5;
+                        }
+                        None => break,
+                    }
+                }
+                return Err(SceneError {
+                    file: file.clone(),
+                    line: pos.map(|p| text[..p].matches('\n').count() + 1),
+                    field: Some("bodies.shape".into()),
+                    message: format!("body `{}`: {e}", b.name),
+                });
+            }
+        }
         Ok(scene)
     }
 

@@ -194,5 +194,17 @@ fn check_rejects_a_missing_mesh_with_status_2() {
     assert_eq!(st.status.code(), Some(2));
     let msg = String::from_utf8_lossy(&st.stderr);
     assert!(msg.contains("cup") && msg.contains("not found"), "{msg}");
+    assert!(msg.contains("line 3"), "{msg}");
+    let st = tumble()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            d.join("o").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(st.status.code(), Some(2));
+    assert!(!d.join("o").exists(), "nothing is written for a bad mesh");
     let _ = std::fs::remove_dir_all(&d);
 }
