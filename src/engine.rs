@@ -91,20 +91,21 @@ impl Simulation {
 
     /// Make the clock land exactly on `t` (an output or end time).
     pub fn set_stop_at(&mut self, t: Option<f64>) {
-        let policy = self.world.resource::<Params>().dt_policy.clone();
         let h = self.grid().h;
         let diag = self.world.resource::<Diagnostics>();
-        let viscous = self.world.resource::<Params>().viscous_rate(h);
-        let dt = crate::systems::diagnostics::allowed_dt(
-            &policy,
-            &diag.sample,
+        let (sample, fallback) = (diag.sample, diag.dt_fallback);
+        let now = self.time();
+        let dt = crate::systems::diagnostics::next_dt(
+            self.world.resource::<Params>(),
+            &sample,
             h,
-            diag.dt_fallback,
-            viscous,
+            fallback,
+            now,
+            t,
         );
         let mut time = self.world.resource_mut::<SimTime>();
         time.stop_at = t;
-        time.dt = crate::systems::diagnostics::land_on(time.t, dt, t);
+        time.dt = dt;
     }
 
     /// Why the run must stop, if it must.

@@ -152,6 +152,25 @@ pub fn allowed_dt(policy: &TimeStep, sample: &Sample, h: f64, fallback: f64, vis
     }
 }
 
+/// The next step: what the policy allows for `sample`, landed on `stop_at`.
+pub fn next_dt(
+    params: &Params,
+    sample: &Sample,
+    h: f64,
+    fallback: f64,
+    t: f64,
+    stop_at: Option<f64>,
+) -> f64 {
+    let dt = allowed_dt(
+        &params.dt_policy,
+        sample,
+        h,
+        fallback,
+        params.viscous_rate(h),
+    );
+    land_on(t, dt, stop_at)
+}
+
 /// Shorten `dt` so that the clock lands exactly on `stop_at`, without leaving a sliver.
 pub fn land_on(t: f64, dt: f64, stop_at: Option<f64>) -> f64 {
     match stop_at {
@@ -201,14 +220,7 @@ pub fn diagnostics_init(
         ));
     }
     diag.sample = s;
-    let dt = allowed_dt(
-        &params.dt_policy,
-        &s,
-        grid.h,
-        diag.dt_fallback,
-        params.viscous_rate(grid.h),
-    );
-    time.dt = land_on(time.t, dt, time.stop_at);
+    time.dt = next_dt(&params, &s, grid.h, diag.dt_fallback, time.t, time.stop_at);
 }
 
 /// The diagnostics system: closes the step.
@@ -252,13 +264,6 @@ pub fn diagnostics(
         ));
     }
     diag.sample = s;
-    let dt = allowed_dt(
-        &params.dt_policy,
-        &s,
-        grid.h,
-        diag.dt_fallback,
-        params.viscous_rate(grid.h),
-    );
-    time.dt = land_on(time.t, dt, time.stop_at);
+    time.dt = next_dt(&params, &s, grid.h, diag.dt_fallback, time.t, time.stop_at);
     timer.stop(&mut timings, "diagnostics");
 }
