@@ -108,6 +108,80 @@ pub struct Hydro {
     pub torque: DVec3,
 }
 
+/// Contact state of a body: its default κ, and the contact force and torque the collision
+/// system found this step (world frame; torque about the χ-centroid).
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct ContactState {
+    /// This body's contact strength κ (a pair uses the mean of its bodies' values).
+    pub kappa: f64,
+    /// Contact force on the body this step.
+    pub force: DVec3,
+    /// Contact torque on the body this step, about its centroid.
+    pub torque: DVec3,
+    /// Contact potential energy of the body this step: the sum over its band of
+    /// ρ_i κ/ε ζ(φ_i/ε) E₁(d/ε) dV, whose rigid-motion gradient is the contact force.
+    pub potential: f64,
+}
+
+/// Quadrature points of a body's contact band 0 < φ_i < ε, fixed in the body frame (material
+/// points), with weights ζ(φ_i/ε)/ε dV: the surface measure the contact force (eq. 22) is
+/// spread with. Because the points move with the body, the discrete contact force is exactly
+/// the rigid-motion gradient of a discrete potential, whatever the body's pose on the grid.
+#[derive(Component, Debug, Clone, Default)]
+pub struct ContactPoints {
+    /// Body-frame positions.
+    pub points: Vec<DVec3>,
+    /// φ_i at each point.
+    pub phi: Vec<f64>,
+    /// Weight ζ(φ_i/ε)/ε times the volume element.
+    pub weights: Vec<f64>,
+}
+
+impl ContactPoints {
+    /// Sample the band 0 < φ < `eps` of `level_set` on a body-frame lattice of spacing
+    /// `spacing` (empty for unbounded shapes).
+    pub fn new(level_set: &LocalLevelSet, eps: f64, spacing: f64, dim: usize) -> Self {
+        let mut out = ContactPoints::default();
+        let Some((lo, hi)) = level_set.bounds() else {
+            return out;
+        };
+        let n = |a: usize| ((hi[a] - lo[a]) / spacing).ceil() as usize + 1;
+        let (nx, ny, nz) = (n(0), n(1), if dim == 3 { n(2) } else { 1 });
+        let dv = spacing.powi(dim as i32);
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let p = DVec3::new(
+                        lo.x + i as f64 * spacing,
+                        lo.y + j as f64 * spacing,
+                        if dim == 3 {
+                            lo.z + k as f64 * spacing
+                        } else {
+                            0.0
+                        },
+                    );
+                    let phi = level_set.phi(p);
+                    let w = crate::systems::collision::zeta(phi / eps) / eps * dv;
+                    if w > 0.0 {
+                        out.points.push(p);
+                        out.phi.push(phi);
+                        out.weights.push(w);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Angular momentum ρ_i J Ω of a body moving in vacuum (the flow solver off), world frame;
+/// `None` until the first step sets it.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct FreeMotion {
+    /// ρ_i J Ω, kept so a free body's rotation conserves angular momentum as J turns.
+    pub angular_momentum: Option<DVec3>,
+}
+
 /// Grid fields made by the bodies.
 #[derive(Resource, Debug, Clone)]
 pub struct BodyFields {
@@ -180,6 +254,12 @@ pub fn spawn_bodies(world: &mut World, scene: &Scene, grid: &Grid) -> anyhow::Re
             )
         })?;
         let level_set = LocalLevelSet::new(geom, grid.h, band(grid), grid.dim);
+        let contact_points = if matches!(spec.kind, BodyKind::Dynamic) {
+            let eps = scene.contact.eps.unwrap_or(grid.h);
+            ContactPoints::new(&level_set, eps, 0.5 * grid.h.min(eps), grid.dim)
+        } else {
+            ContactPoints::default()
+        };
         let density = spec.density.unwrap_or(rho_f);
         let orientation = {
             let r = angular3(&spec.rotation);
@@ -233,6 +313,12 @@ pub fn spawn_bodies(world: &mut World, scene: &Scene, grid: &Grid) -> anyhow::Re
             BodyShape { level_set },
             patch,
             Hydro::default(),
+            ContactState {
+                kappa: spec.kappa.unwrap_or(scene.contact.kappa),
+                ..Default::default()
+            },
+            FreeMotion::default(),
+            contact_points,
         ));
     }
     Ok(scene.bodies.len())

@@ -4,7 +4,7 @@ use crate::fields::{Fields, Params, Sample, SimTime, Timings};
 use crate::grid::Grid;
 use crate::init::add_initial;
 use crate::scene::Scene;
-use crate::schedule::{startup_schedule, step_schedule_with};
+use crate::schedule::{startup_schedule, step_schedule_with, vacuum_schedule};
 use crate::spectral::Spectral;
 use crate::systems::diagnostics::Diagnostics;
 use crate::systems::transport::TransportScratch;
@@ -44,6 +44,10 @@ impl Simulation {
         if n_bodies > 0 {
             world.insert_resource(crate::bodies::BodyFields::new(&grid, scene.fluid.density));
             world.insert_resource(crate::systems::rigid_velocity::BodySums::new(&grid));
+            world.insert_resource(crate::systems::collision::ContactParams::from_scene(
+                &scene, grid.h,
+            ));
+            world.insert_resource(crate::systems::collision::Contacts::with_capacity(n_bodies));
         }
         world.insert_resource(grid);
         let mut startup = startup_schedule();
@@ -51,7 +55,11 @@ impl Simulation {
             .initialize(&mut world)
             .map_err(|e| anyhow::anyhow!("the startup schedule cannot be built: {e:?}"))?;
         startup.run(&mut world);
-        let mut schedule = step_schedule_with(n_bodies > 0);
+        let mut schedule = if scene.vacuum {
+            vacuum_schedule()
+        } else {
+            step_schedule_with(n_bodies > 0)
+        };
         schedule
             .initialize(&mut world)
             .map_err(|e| anyhow::anyhow!("the step schedule cannot be built: {e:?}"))?;

@@ -92,13 +92,45 @@ pub struct Params {
     pub lambda: f64,
     /// Half-width of the smoothed Heaviside, in cells.
     pub interface_cells: f64,
+    /// Offset of the penalization mask into the body, in cells.
+    pub penalization_offset: f64,
     /// Boussinesq form of the baroclinic term.
     pub boussinesq: bool,
     /// Whether the scene has bodies.
     pub has_bodies: bool,
 }
 
+/// The penalization mask of a body from its χ and φ at a node: χ itself when the offset is
+/// zero, else the smoothed Heaviside H_ε(φ - offset) moved into the body.
+#[derive(Debug, Clone, Copy)]
+pub struct PenalizationMask {
+    /// Offset into the body (length).
+    pub offset: f64,
+    /// Half-width of the smoothed Heaviside (length).
+    pub eps: f64,
+}
+
+impl PenalizationMask {
+    /// The mask value at a node with characteristic function `chi` and level set `phi`.
+    #[inline]
+    pub fn apply(&self, chi: f64, phi: f64) -> f64 {
+        if self.offset == 0.0 {
+            chi
+        } else {
+            crate::bodies::heaviside(phi - self.offset, self.eps)
+        }
+    }
+}
+
 impl Params {
+    /// The penalization mask on a grid of spacing `h`.
+    pub fn penalization_mask(&self, h: f64) -> PenalizationMask {
+        PenalizationMask {
+            offset: self.penalization_offset * h,
+            eps: self.interface_cells * h,
+        }
+    }
+
     /// ν/h² when the scene has bodies (the diffusion-number bound applies), else 0.
     pub fn viscous_rate(&self, h: f64) -> f64 {
         if self.has_bodies {
@@ -122,6 +154,7 @@ impl Params {
             remesh_kernel: scene.numerics.remesh_kernel,
             lambda: scene.numerics.lambda,
             interface_cells: scene.numerics.interface_cells,
+            penalization_offset: scene.numerics.penalization_offset,
             boussinesq: scene.numerics.boussinesq,
             has_bodies: !scene.bodies.is_empty(),
         }

@@ -95,6 +95,7 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     )
     .context("cannot create series.csv")?;
     let mut bodies_csv = BodiesCsv::create(&dir.join("bodies.csv"), &sim)?;
+    let mut contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
     let mut pvd = PvdSeries::new(dir.join("fields.pvd"));
     let mut snapshot = 0usize;
     write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
@@ -116,6 +117,9 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
                 write_row(&mut series, &sim.sample())?;
                 if let Some(b) = bodies_csv.as_mut() {
                     b.rows(&mut sim)?;
+                }
+                if let Some(c) = contacts_csv.as_mut() {
+                    c.rows(&sim)?;
                 }
                 for &(name, s) in &sim.timings().last {
                     match totals.iter_mut().find(|e| e.0 == name) {
@@ -161,6 +165,9 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     series.flush().context("cannot write series.csv")?;
     if let Some(b) = bodies_csv.as_mut() {
         b.flush()?;
+    }
+    if let Some(c) = contacts_csv.as_mut() {
+        c.flush()?;
     }
     let wall = wall0.elapsed().as_secs_f64();
     let summary = RunSummary {
@@ -351,5 +358,59 @@ impl BodiesCsv {
     pub fn flush(&mut self) -> anyhow::Result<()> {
         use std::io::Write;
         self.0.flush().context("cannot write bodies.csv")
+    }
+}
+
+/// `contacts.csv`: one row per close pair of bodies per step.
+pub struct ContactsCsv(std::io::BufWriter<std::fs::File>);
+
+/// The header of `contacts.csv`.
+pub const CONTACTS_HEADER: &str = "t,body_a,body_b,gap,normal_force";
+
+impl ContactsCsv {
+    /// Create the file if the scene has a dynamic body.
+    pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Option<Self>> {
+        if !sim
+            .scene()
+            .bodies
+            .iter()
+            .any(|b| matches!(b.kind, crate::scene::BodyKind::Dynamic))
+        {
+            return Ok(None);
+        }
+        use std::io::Write;
+        let f = std::fs::File::create(path)
+            .with_context(|| format!("cannot create {}", path.display()))?;
+        let mut w = std::io::BufWriter::new(f);
+        writeln!(w, "{CONTACTS_HEADER}").context("cannot write contacts.csv")?;
+        Ok(Some(ContactsCsv(w)))
+    }
+
+    /// Append this step's close pairs.
+    pub fn rows(&mut self, sim: &Simulation) -> anyhow::Result<()> {
+        use std::io::Write;
+        let Some(c) = sim
+            .world
+            .get_resource::<crate::systems::collision::Contacts>()
+        else {
+            return Ok(());
+        };
+        let t = sim.time();
+        let names = &sim.scene().bodies;
+        for r in &c.records {
+            writeln!(
+                self.0,
+                "{t},{},{},{},{}",
+                names[r.a].name, names[r.b].name, r.gap, r.force
+            )
+            .context("cannot write contacts.csv")?;
+        }
+        Ok(())
+    }
+
+    /// Flush to disk.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        use std::io::Write;
+        self.0.flush().context("cannot write contacts.csv")
     }
 }

@@ -10,8 +10,8 @@
 //! ordering is an error: two systems that touch the same data must be ordered.
 
 use crate::systems::{
-    baroclinic, density, diagnostics, diffusion, level_sets, penalization, poisson, rigid_update,
-    rigid_velocity, transport,
+    baroclinic, collision, density, diagnostics, diffusion, free_motion, level_sets, penalization,
+    poisson, rigid_update, rigid_velocity, transport,
 };
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
@@ -92,11 +92,27 @@ pub fn step_schedule_with(bodies: bool) -> Schedule {
     if bodies {
         s.add_systems(level_sets::level_sets.in_set(PhysicsSet::LevelSets));
         s.add_systems(density::density.in_set(PhysicsSet::Density));
+        s.add_systems(collision::collision.in_set(PhysicsSet::Collision));
         s.add_systems(rigid_velocity::rigid_velocity.in_set(PhysicsSet::RigidVelocity));
         s.add_systems(penalization::penalization.in_set(PhysicsSet::Penalization));
         s.add_systems(baroclinic::baroclinic.in_set(PhysicsSet::Baroclinic));
         s.add_systems(rigid_update::rigid_update.in_set(PhysicsSet::RigidUpdate));
     }
+    s
+}
+
+/// The step schedule of vacuum mode (the flow solver off): level sets, contact, motion under
+/// gravity and contact (`free_motion` in the rigid-velocity set), rigid update, diagnostics.
+pub fn vacuum_schedule() -> Schedule {
+    let mut s = configured(Step);
+    for pair in PhysicsSet::ALL.windows(2) {
+        s.configure_sets(pair[0].before(pair[1]));
+    }
+    s.add_systems(level_sets::level_sets.in_set(PhysicsSet::LevelSets));
+    s.add_systems(collision::collision.in_set(PhysicsSet::Collision));
+    s.add_systems(free_motion::free_motion.in_set(PhysicsSet::RigidVelocity));
+    s.add_systems(rigid_update::rigid_update.in_set(PhysicsSet::RigidUpdate));
+    s.add_systems(diagnostics::diagnostics.in_set(PhysicsSet::Diagnostics));
     s
 }
 

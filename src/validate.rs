@@ -12,6 +12,9 @@ use crate::systems::transport::{LineScratch, sweep};
 use std::f64::consts::PI;
 use std::fmt;
 
+#[path = "validate_contact.rs"]
+mod contact;
+
 /// Every case, in the order `tumble validate` runs them.
 pub const CASES: &[&str] = &[
     "poisson",
@@ -21,6 +24,9 @@ pub const CASES: &[&str] = &[
     "taylor-green-3d",
     "sedimentation-2d",
     "sphere-settling",
+    "rebound-vacuum",
+    "ellipsoid-sphere",
+    "dkt",
 ];
 
 /// The bundled scenes, by file name (so validation runs from any directory).
@@ -43,6 +49,15 @@ pub const SCENES: &[(&str, &str)] = &[
         "sphere-settling.ron",
         include_str!("../scenes/sphere-settling.ron"),
     ),
+    (
+        "rebound-vacuum.ron",
+        include_str!("../scenes/rebound-vacuum.ron"),
+    ),
+    (
+        "ellipsoid-sphere.ron",
+        include_str!("../scenes/ellipsoid-sphere.ron"),
+    ),
+    ("dkt.ron", include_str!("../scenes/dkt.ron")),
 ];
 
 /// A bundled scene by file name.
@@ -73,7 +88,12 @@ pub struct Row {
 }
 
 impl Row {
-    fn rel(quantity: impl Into<String>, reference: f64, measured: f64, tolerance: f64) -> Row {
+    pub(crate) fn rel(
+        quantity: impl Into<String>,
+        reference: f64,
+        measured: f64,
+        tolerance: f64,
+    ) -> Row {
         Row {
             quantity: quantity.into(),
             reference,
@@ -83,7 +103,12 @@ impl Row {
             relative: true,
         }
     }
-    fn abs(quantity: impl Into<String>, reference: f64, measured: f64, tolerance: f64) -> Row {
+    pub(crate) fn abs(
+        quantity: impl Into<String>,
+        reference: f64,
+        measured: f64,
+        tolerance: f64,
+    ) -> Row {
         Row {
             quantity: quantity.into(),
             reference,
@@ -111,7 +136,7 @@ pub struct Report {
 }
 
 impl Report {
-    fn new(case: &str) -> Self {
+    pub(crate) fn new(case: &str) -> Self {
         Report {
             case: case.to_string(),
             rows: Vec::new(),
@@ -174,6 +199,9 @@ pub fn run_case(case: &str, quick: bool) -> anyhow::Result<Report> {
         "taylor-green-3d" => taylor_green_3d(quick),
         "sedimentation-2d" => sedimentation_2d(quick),
         "sphere-settling" => sphere_settling(quick),
+        "rebound-vacuum" => contact::rebound_vacuum(quick),
+        "ellipsoid-sphere" => contact::ellipsoid_sphere(quick),
+        "dkt" => contact::dkt(quick),
         _ => anyhow::bail!(
             "unknown validation case `{case}`; the cases are: {}",
             CASES.join(", ")
@@ -533,7 +561,7 @@ fn taylor_green_3d(quick: bool) -> anyhow::Result<Report> {
 }
 
 /// The state of the first dynamic body.
-fn dynamic_body(sim: &mut Simulation) -> Option<crate::bodies::RigidState> {
+pub(crate) fn dynamic_body(sim: &mut Simulation) -> Option<crate::bodies::RigidState> {
     let mut q = sim
         .world
         .query::<(&crate::bodies::Body, &crate::bodies::RigidState)>();

@@ -4,9 +4,11 @@
 //! (Coquerelle & Cottet, J. Comput. Phys. 227 (2008)).
 
 pub mod baroclinic;
+pub mod collision;
 pub mod density;
 pub mod diagnostics;
 pub mod diffusion;
+pub mod free_motion;
 pub mod level_sets;
 pub mod penalization;
 pub mod poisson;

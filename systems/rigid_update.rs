@@ -1,8 +1,9 @@
 //! # rigid_update: move the bodies (paper section 3.1)
 //!
-//! Over one step with the rigid velocity held constant: c ← c + V Δt and the orientation is
-//! composed with the rotation by the angle |Ω| Δt about Ω/|Ω| (the paper's quaternion matrix
-//! R^n), q ← rot(Ω Δt) q. Dynamic bodies use the ū computed from the flow this step,
+//! Over one step with the rigid velocity held constant: the centroid x_G ← x_G + V Δt, the
+//! orientation is composed with the rotation by the angle |Ω| Δt about Ω/|Ω| (the paper's
+//! quaternion matrix R^n), q ← rot(Ω Δt) q, and the body frame's origin c turns with it about
+//! x_G: c ← x_G + rot(Ω Δt)(c - x_G). Dynamic bodies use the ū computed from the flow this step,
 //! kinematic bodies their prescribed motion, static bodies stay.
 
 use crate::bodies::{Body, RigidState, kinematic_velocity};
@@ -26,11 +27,17 @@ pub fn rigid_update(
             s.velocity = v;
             s.angular_velocity = w;
         }
+        // The body turns about its centroid and the centroid moves with V.
         let v = s.velocity;
-        s.center += v * dt;
+        let arm = s.center - s.centroid;
+        s.centroid += v * dt;
         let turn = s.angular_velocity * dt;
         if turn.length() > 0.0 {
-            s.orientation = (DQuat::from_scaled_axis(turn) * s.orientation).normalize();
+            let q = DQuat::from_scaled_axis(turn);
+            s.orientation = (q * s.orientation).normalize();
+            s.center = s.centroid + q * arm;
+        } else {
+            s.center = s.centroid + arm;
         }
     }
     timer.stop(&mut timings, "rigid_update");
