@@ -15,6 +15,7 @@ pub mod init;
 pub mod kernels;
 pub mod levelset;
 pub mod output;
+pub mod plot;
 pub mod run;
 pub mod scene;
 pub mod schedule;

@@ -66,6 +66,11 @@ enum Command {
         #[arg(long, default_value_t = 2)]
         warmup: usize,
     },
+    /// Write PNG plots (energy, enstrophy, bodies, contacts) next to a run's CSV files.
+    Plot {
+        /// The run directory (holds series.csv).
+        run_dir: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -234,6 +239,18 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Plot { run_dir } => match tumble::plot::plot_run_dir(&run_dir) {
+            Ok(paths) => {
+                for p in paths {
+                    println!("{}", p.display());
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(1)
+            }
+        },
     }
 }
 

@@ -27,6 +27,7 @@ pub const CASES: &[&str] = &[
     "rebound-vacuum",
     "ellipsoid-sphere",
     "dkt",
+    "tank-vacuum",
 ];
 
 /// The bundled scenes, by file name (so validation runs from any directory).
@@ -58,6 +59,11 @@ pub const SCENES: &[(&str, &str)] = &[
         include_str!("../scenes/ellipsoid-sphere.ron"),
     ),
     ("dkt.ron", include_str!("../scenes/dkt.ron")),
+    ("tank-200.ron", include_str!("../scenes/tank-200.ron")),
+    (
+        "tank-200-vacuum.ron",
+        include_str!("../scenes/tank-200-vacuum.ron"),
+    ),
 ];
 
 /// A bundled scene by file name.
@@ -202,6 +208,7 @@ pub fn run_case(case: &str, quick: bool) -> anyhow::Result<Report> {
         "rebound-vacuum" => contact::rebound_vacuum(quick),
         "ellipsoid-sphere" => contact::ellipsoid_sphere(quick),
         "dkt" => contact::dkt(quick),
+        "tank-vacuum" => contact::tank_vacuum(quick),
         _ => anyhow::bail!(
             "unknown validation case `{case}`; the cases are: {}",
             CASES.join(", ")
@@ -570,10 +577,28 @@ pub(crate) fn dynamic_body(sim: &mut Simulation) -> Option<crate::bodies::RigidS
         .map(|(_, s)| *s)
 }
 
-/// One sedimentation-2d run at spacing `h` and step `dt`: (max fall speed, deepest point of
-/// the disk below the cavity floor, max relative deviation from rigid motion of the vertical
-/// velocity across the disk during the fall, error if the run stopped).
-fn sedimentation_run(h: f64, dt: f64) -> anyhow::Result<(f64, f64, f64, Option<String>)> {
+/// What one sedimentation-2d run measured.
+struct Sedimentation {
+    /// Largest fall speed.
+    vmax: f64,
+    /// Lowest point of the disk relative to the cavity floor (negative: below it).
+    ymin: f64,
+    /// Largest relative deviation from rigid motion of the vertical velocity across the disk
+    /// during the fall.
+    dev: f64,
+    /// Rise of the disk's centre after its first impact.
+    rebound: f64,
+    /// Speed at the end of the run (0.3 after the first impact), relative to `vmax`.
+    final_speed: f64,
+    /// Local minima of the height after the first impact (1 or 2: impact, landing; more is an
+    /// oscillation).
+    bounces: usize,
+    /// Why the run stopped early, if it did.
+    failure: Option<String>,
+}
+
+/// One sedimentation-2d run at spacing `h`, step `dt` and contact strength `kappa`.
+fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentation> {
     let mut scene = bundled_scene("sedimentation-2d.ron")?;
     let wall = 8.0 * h;
     scene.domain.origin = Some(vec![-wall, -wall]);
@@ -581,24 +606,40 @@ fn sedimentation_run(h: f64, dt: f64) -> anyhow::Result<(f64, f64, f64, Option<S
     scene.domain.h = Some(h);
     scene.domain.cells = None;
     scene.numerics.dt = crate::scene::TimeStep::Fixed(dt);
+    scene.contact.kappa = kappa;
     let r = 0.125;
     let mut sim = Simulation::new(scene)?;
-    let (mut vmax, mut ymin, mut dev) = (0.0f64, f64::INFINITY, 0.0f64);
-    let mut failure = None;
+    let mut out = Sedimentation {
+        vmax: 0.0,
+        ymin: f64::INFINITY,
+        dev: 0.0,
+        rebound: 0.0,
+        final_speed: f64::NAN,
+        bounces: 0,
+        failure: None,
+    };
     let mut t_contact = None;
-    sim.set_stop_at(Some(1.2));
-    while sim.time() < 1.2 - 1e-12 {
+    let mut y_impact = f64::INFINITY;
+    let mut ys: Vec<f64> = Vec::new();
+    sim.set_stop_at(Some(1.5));
+    while sim.time() < 1.5 - 1e-12 {
         if let Err(e) = sim.step() {
-            failure = Some(e.to_string());
+            out.failure = Some(e.to_string());
             break;
         }
         let Some(st) = dynamic_body(&mut sim) else {
             break;
         };
-        vmax = vmax.max(-st.velocity.y);
-        ymin = ymin.min(st.center.y - r);
-        if t_contact.is_none() && st.center.y - r < 2.0 * h {
+        out.vmax = out.vmax.max(-st.velocity.y);
+        out.ymin = out.ymin.min(st.center.y - r);
+        if t_contact.is_none() && st.velocity.y >= 0.0 && sim.steps() > 10 {
             t_contact = Some(sim.time());
+        }
+        if t_contact.is_some() {
+            y_impact = y_impact.min(st.center.y);
+            out.rebound = out.rebound.max(st.center.y - y_impact);
+            ys.push(st.center.y);
+            out.final_speed = st.velocity.length() / out.vmax;
         }
         if t_contact.is_some_and(|tc| sim.time() > tc + 0.3) {
             break;
@@ -614,15 +655,37 @@ fn sedimentation_run(h: f64, dt: f64) -> anyhow::Result<(f64, f64, f64, Option<S
                 let d = ((x[0] - st.center.x).powi(2) + (x[1] - st.center.y).powi(2)).sqrt();
                 if d < r - g.h {
                     let uy = u[1][g.idx(i, j, 0)];
-                    dev = dev.max(((uy - st.velocity.y) / st.velocity.y).abs());
+                    out.dev = out.dev.max(((uy - st.velocity.y) / st.velocity.y).abs());
                 }
             }
         }
     }
-    Ok((vmax, ymin, dev, failure))
+    // Local minima of the height after the impact (plateaus count once), ignoring wiggles
+    // below 1e-4 of the disk radius.
+    let tol = 1e-4 * r;
+    let mut falling = true;
+    let mut extreme = ys.first().copied().unwrap_or(0.0);
+    out.bounces = 1;
+    for &y in &ys {
+        if falling {
+            if y > extreme + tol {
+                falling = false;
+                extreme = y;
+            } else {
+                extreme = extreme.min(y);
+            }
+        } else if y < extreme - tol {
+            falling = true;
+            out.bounces += 1;
+            extreme = y;
+        } else {
+            extreme = extreme.max(y);
+        }
+    }
+    Ok(out)
 }
 
-/// Paper section 4.1: a 2D disk settling in a cavity onto its floor.
+/// Paper section 4.1: a 2D disk settling in a cavity onto its floor, with contact.
 fn sedimentation_2d(quick: bool) -> anyhow::Result<Report> {
     let mut rep = Report::new("sedimentation-2d");
     let runs: &[(f64, f64)] = if quick {
@@ -632,26 +695,63 @@ fn sedimentation_2d(quick: bool) -> anyhow::Result<Report> {
     };
     let mut res = Vec::new();
     for &(h, dt) in runs {
-        let (vmax, ymin, dev, failure) = sedimentation_run(h, dt)?;
+        let s = sedimentation_run(h, dt, 30.0)?;
         rep.notes.push(format!(
-            "h = 1/{:.0}, dt = {dt}: max fall velocity {vmax:.4}, lowest point of the disk {ymin:.4}, max deviation from rigid motion across the disk during the fall {:.2}% (paper, Fig. 2: about 2% at h = 1/512){}",
+            "h = 1/{:.0}, dt = {dt}, kappa = 30: max fall velocity {:.4}, lowest point of the disk {:.5} ({:.2} h above the floor), rebound {:.5}, {} local minima of the height after the impact, final speed {:.2e} of the max, max deviation from rigid motion across the disk during the fall {:.2}% (paper, Fig. 2: about 2% at h = 1/512){}",
             1.0 / h,
-            100.0 * dev,
-            failure.map(|f| format!("; stopped: {f}")).unwrap_or_default()
+            s.vmax,
+            s.ymin,
+            s.ymin / h,
+            s.rebound,
+            s.bounces,
+            s.final_speed,
+            100.0 * s.dev,
+            s.failure.as_ref().map(|f| format!("; stopped: {f}")).unwrap_or_default()
         ));
         rep.rows.push(Row::abs(
-            format!("h = 1/{:.0}: depth of the disk below the floor", 1.0 / h),
+            format!(
+                "h = 1/{:.0}: the disk stays above the floor (1 = yes)",
+                1.0 / h
+            ),
+            1.0,
+            if s.ymin > 0.0 { 1.0 } else { 0.0 },
             0.0,
-            (-ymin).max(0.0),
-            h,
         ));
-        res.push(vmax);
+        rep.rows.push(Row::abs(
+            format!(
+                "h = 1/{:.0}: at rest 0.3 after the impact, no oscillation (speed < 1% of max, at most 2 minima)",
+                1.0 / h
+            ),
+            1.0,
+            if s.final_speed < 0.01 && s.bounces <= 2 {
+                1.0
+            } else {
+                0.0
+            },
+            0.0,
+        ));
+        res.push(s);
     }
     rep.rows.push(Row::rel(
         "max fall velocity, finer grid against coarser",
-        res[0],
-        res[1],
+        res[0].vmax,
+        res[1].vmax,
         0.02,
+    ));
+    let (h, dt) = runs[0];
+    let doubled = sedimentation_run(h, dt, 60.0)?;
+    rep.rows.push(Row::rel(
+        format!(
+            "h = 1/{:.0}: rebound height with kappa = 60 against kappa = 30",
+            1.0 / h
+        ),
+        res[0].rebound,
+        doubled.rebound,
+        0.10,
+    ));
+    rep.notes.push(format!(
+        "kappa = 60: rebound {:.5}, lowest point {:.5}",
+        doubled.rebound, doubled.ymin
     ));
     Ok(rep)
 }

@@ -226,7 +226,7 @@ pub fn collision(
     let grow = (cut - crate::bodies::band(&grid)).max(0.0) + grid.h;
     let c = &mut *contacts;
     c.boxes.clear();
-    for (entity, body, state, shape, patch, _, _) in &bodies {
+    for (entity, body, state, shape, patch, _, points) in &bodies {
         let kappa = states.get(entity).map(|s| s.kappa).unwrap_or(0.0);
         let (aabb, radius) = match shape.level_set.bounds() {
             Some((lo, hi)) => {
@@ -241,7 +241,7 @@ pub fn collision(
                     maxs.z = 1.0;
                 }
                 let aabb = Aabb::new(mins, maxs).loosened(grow);
-                (Some(aabb), 0.5 * (hi - lo).length())
+                (Some(aabb), points.radius.min(0.5 * (hi - lo).length()))
             }
             None => (None, f64::INFINITY),
         };
@@ -287,7 +287,11 @@ pub fn collision(
             if ay.mins.x > ax.maxs.x {
                 break;
             }
-            if ax.intersects(&ay) {
+            // Boxes first, then the bodies' bounding spheres grown by the range.
+            let reach = boxes[x].radius + boxes[y].radius + cut;
+            if ax.intersects(&ay)
+                && (boxes[x].center - boxes[y].center).length_squared() <= reach * reach
+            {
                 push(&mut c.pairs, x, y);
                 push(&mut c.pairs, y, x);
             }
@@ -326,7 +330,18 @@ pub fn collision(
             else {
                 return PairResult::default();
             };
-            directed(grid, ri.2, ri.6, ri.5.density, sj.2, sj.3, kappa, eps, cut)
+            directed(
+                grid,
+                ri.2,
+                ri.6,
+                ri.5.density,
+                sj.2,
+                sj.3,
+                boxes[s].radius,
+                kappa,
+                eps,
+                cut,
+            )
         })
         .collect_into_vec(&mut c.results);
     // Sum in the fixed pair order; one record per unordered close pair.
@@ -338,7 +353,10 @@ pub fn collision(
         if let Ok(mut st) = states.get_mut(boxes[r].entity) {
             st.force += res.force;
             st.torque += res.torque;
-            st.potential += res.potential;
+            // Between two dynamic bodies each pushes the other from its own band with the
+            // same pair potential (for spheres), so half of each goes to each body.
+            let share = if boxes[s].dynamic { 0.5 } else { 1.0 };
+            st.potential += share * res.potential;
         }
         let (a, b) = (boxes[r].id.min(boxes[s].id), boxes[r].id.max(boxes[s].id));
         match c.records.last_mut() {
@@ -367,6 +385,7 @@ fn directed(
     rho_i: f64,
     sj: &RigidState,
     shj: &BodyShape,
+    radius_j: f64,
     kappa: f64,
     eps: f64,
     cut: f64,
@@ -375,6 +394,8 @@ fn directed(
         gap: f64::INFINITY,
         ..Default::default()
     };
+    // Points farther than this from j's origin cannot be within range of j.
+    let far = (radius_j + cut).powi(2);
     let inv = sj.orientation.inverse();
     let ls = &shj.level_set;
     // The gradient of φ_j by a narrow central difference: the local gradient of its
@@ -384,6 +405,9 @@ fn directed(
     let coef = rho_i * kappa;
     for ((p, &phi_i), &w) in pi.points.iter().zip(&pi.phi).zip(&pi.weights) {
         let x = si.center + si.orientation * *p;
+        if (x - sj.center).length_squared() > far {
+            continue;
+        }
         let xl = inv * (x - sj.center);
         let d = -ls.phi(xl);
         if d > cut {
@@ -395,11 +419,9 @@ fn directed(
             e[ax] = delta;
             g[ax] = (ls.phi(xl + e) - ls.phi(xl - e)) / (2.0 * delta);
         }
-        let len = g.length();
-        if len < 1e-12 {
-            continue;
-        }
-        let n = sj.orientation * (g / len);
+        // Not normalised: the force is then the exact gradient of the potential below, also
+        // where an interpolated φ_j has |∇φ_j| slightly off 1.
+        let n = sj.orientation * g;
         let dd = d.max(d_min);
         let f = -(coef * w * (-dd / eps).exp() / dd) * n;
         // The potential whose (rigid-motion) gradient this force is: κ ∫_d^∞ e^{-s/ε}/s ds.

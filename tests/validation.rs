@@ -44,3 +44,21 @@ fn sphere_settling_terminal_velocity_at_h_1_64() {
     // Paper Table 1, d = 0.3, ν = 0.02 at h = 1/64 (about a minute).
     check("sphere-settling");
 }
+
+#[test]
+fn rebound_in_vacuum_keeps_the_drop_height() {
+    // Paper Fig. 1, full resolution (a few seconds).
+    check("rebound-vacuum");
+}
+
+#[test]
+fn ellipsoid_on_sphere_spins_about_three_axes_and_keeps_its_energy() {
+    // Paper Fig. 9, full resolution (a few seconds).
+    check("ellipsoid-sphere");
+}
+
+#[test]
+fn dkt_spheres_kiss() {
+    // Paper section 4.2.2 at h = 1/60 up to t = 0.42: drafting and kissing (about a minute).
+    check("dkt");
+}

@@ -1,0 +1,184 @@
+//! The level-set contact model (paper eqs. 20-22) in vacuum, at reduced resolution: a head-on
+//! collision of equal spheres exchanges their velocities, a sphere resting on a floor sits at
+//! the gap where the model's force balances its weight (computed here by quadrature of the
+//! continuous model, independently of the grid code), and no body passes through a wall.
+
+use std::f64::consts::PI;
+use tumble::bodies::{Body, RigidState};
+use tumble::engine::Simulation;
+use tumble::scene::Scene;
+use tumble::systems::collision::zeta;
+
+fn sim(text: &str) -> Simulation {
+    let scene = Scene::parse(text, "test", "test").unwrap_or_else(|e| panic!("{e}"));
+    Simulation::new(scene).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Dynamic bodies' states, by scene id.
+fn states(s: &mut Simulation) -> Vec<RigidState> {
+    let mut q = s.world.query::<(&Body, &RigidState)>();
+    let mut v: Vec<_> = q
+        .iter(&s.world)
+        .filter(|(b, _)| b.is_dynamic())
+        .map(|(b, st)| (b.id, *st))
+        .collect();
+    v.sort_by_key(|e| e.0);
+    v.into_iter().map(|e| e.1).collect()
+}
+
+#[test]
+fn head_on_collision_of_equal_spheres_exchanges_velocities() {
+    let mut s = sim(r#"Scene(
+        domain: (extent: [1.0, 1.0, 1.0], cells: [48, 48, 48]),
+        vacuum: true,
+        contact: (kappa: 5.0),
+        numerics: (dt: Fixed(0.002), end_time: 1.0),
+        bodies: [
+            (name: "a", shape: Sphere(radius: 0.1), position: [0.3, 0.5, 0.5], velocity: [1.0, 0.0, 0.0]),
+            (name: "b", shape: Sphere(radius: 0.1), position: [0.62, 0.5, 0.5]),
+        ],
+    )"#);
+    let mut min_gap = f64::INFINITY;
+    s.set_stop_at(Some(0.3));
+    while s.time() < 0.3 - 1e-12 {
+        s.step().unwrap();
+        let st = states(&mut s);
+        min_gap = min_gap.min((st[1].center - st[0].center).length() - 0.2);
+    }
+    let st = states(&mut s);
+    let (va, vb) = (st[0].velocity, st[1].velocity);
+    println!("after: va = {va}, vb = {vb}, smallest gap {min_gap}");
+    // Equal masses, elastic: a stops, b leaves with a's velocity; momentum 1 (per unit mass).
+    assert!(min_gap > 0.0, "the spheres overlapped: gap {min_gap}");
+    assert!((va.x - 0.0).abs() < 0.01, "a keeps velocity {va}");
+    assert!((vb.x - 1.0).abs() < 0.01, "b leaves with {vb}");
+    let p = va + vb;
+    assert!((p.x - 1.0).abs() < 0.01, "momentum {p} (was 1)");
+    assert!(p.y.abs() < 0.01 && p.z.abs() < 0.01, "momentum {p}");
+}
+
+/// Upward force per unit mass of the continuous model (eq. 22 with the one-sided ζ) on a sphere
+/// of radius `r` whose lowest point is at height `gap` above a plane, for κ and ε.
+fn model_lift(r: f64, gap: f64, kappa: f64, eps: f64) -> f64 {
+    let (ns, nt) = (200, 4000);
+    let mut f = 0.0;
+    for is in 0..ns {
+        let s = (is as f64 + 0.5) / ns as f64 * eps;
+        let w_s = zeta(s / eps) / eps * (eps / ns as f64);
+        let rho = r - s;
+        // θ from the downward axis; only the lower cap is within range.
+        for it in 0..nt {
+            let th = (it as f64 + 0.5) / nt as f64 * 0.5 * PI;
+            let d = gap + r - rho * th.cos();
+            let dv = 2.0 * PI * rho * rho * th.sin() * (0.5 * PI / nt as f64);
+            f += w_s * kappa * (-d / eps).exp() / d * dv;
+        }
+    }
+    f / (4.0 / 3.0 * PI * r * r * r)
+}
+
+#[test]
+fn sphere_rests_on_a_floor_at_the_balance_gap() {
+    let (r, kappa, g) = (0.1, 1.0, 1.0);
+    let h = 1.0 / 64.0;
+    let eps = h;
+    // Bisection for the gap where the contact lift equals the weight.
+    let (mut lo, mut hi) = (0.05 * eps, 10.0 * eps);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if model_lift(r, mid, kappa, eps) > g {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let gap0 = 0.5 * (lo + hi);
+    println!(
+        "balance gap of the continuous model: {gap0} ({} eps)",
+        gap0 / eps
+    );
+    let z0 = 0.1 + r + gap0;
+    let mut s = sim(&format!(
+        r#"Scene(
+        domain: (extent: [0.5, 0.5, 0.5], h: {h}),
+        fluid: (gravity: [0.0, 0.0, -{g}]),
+        vacuum: true,
+        contact: (kappa: {kappa}),
+        numerics: (dt: Fixed(0.002), end_time: 1.0),
+        bodies: [
+            (name: "floor", shape: HalfSpace(normal: [0.0, 0.0, 1.0], offset: 0.0), kind: Static,
+             position: [0.25, 0.25, 0.1]),
+            (name: "ball", shape: Sphere(radius: {r}), position: [0.25, 0.25, {z0}]),
+        ],
+    )"#
+    ));
+    let (mut gmin, mut gmax) = (f64::INFINITY, 0.0f64);
+    s.set_stop_at(Some(1.0));
+    while s.time() < 1.0 - 1e-12 {
+        s.step().unwrap();
+        let gap = states(&mut s)[0].center.z - 0.1 - r;
+        gmin = gmin.min(gap);
+        gmax = gmax.max(gap);
+    }
+    println!("gap stayed in [{gmin}, {gmax}]");
+    assert!(
+        (gmin - gap0).abs() < 0.1 * gap0 && (gmax - gap0).abs() < 0.1 * gap0,
+        "gap left [{}, {}] (balance {gap0}): [{gmin}, {gmax}]",
+        0.9 * gap0,
+        1.1 * gap0
+    );
+}
+
+#[test]
+fn twenty_bodies_dropped_in_a_box_never_pass_through_a_wall_or_each_other() {
+    // h = 1/32, spheres of radius 0.1 (3.2 cells) on a jittered lattice, in a closed box.
+    let mut bodies = String::new();
+    for n in 0..20 {
+        let (i, j, k) = (n % 3, (n / 3) % 3, n / 9);
+        let jitter = 0.013 * ((n * 7) % 5) as f64;
+        bodies += &format!(
+            "(name: \"s{n}\", shape: Sphere(radius: 0.1), position: [{}, {}, {}], velocity: [{}, {}, 0.0]),\n",
+            0.25 + 0.25 * i as f64 + jitter,
+            0.25 + 0.25 * j as f64 - jitter,
+            0.35 + 0.25 * k as f64,
+            0.3 * (jitter - 0.02),
+            -0.2 * (jitter - 0.02),
+        );
+    }
+    let mut s = sim(&format!(
+        r#"Scene(
+        domain: (extent: [1.0, 1.0, 1.0], h: 0.03125),
+        fluid: (gravity: [0.0, 0.0, -1.0]),
+        vacuum: true,
+        contact: (kappa: 5.0),
+        numerics: (dt: Fixed(0.004), end_time: 1.5),
+        bodies: [
+            (name: "box", shape: Complement(Box(half_extents: [0.45, 0.45, 0.45])), kind: Static,
+             position: [0.5, 0.5, 0.5]),
+            {bodies}
+        ],
+    )"#
+    ));
+    let eps = 0.03125;
+    let mut worst = f64::INFINITY;
+    s.set_stop_at(Some(1.5));
+    while s.time() < 1.5 - 1e-12 {
+        s.step().unwrap();
+        let st = states(&mut s);
+        for (a, sa) in st.iter().enumerate() {
+            // Gap to the box's inner faces.
+            for ax in 0..3 {
+                let c = sa.center[ax];
+                worst = worst.min((c - 0.05 - 0.1).min(0.95 - c - 0.1));
+            }
+            for sb in &st[a + 1..] {
+                worst = worst.min((sb.center - sa.center).length() - 0.2);
+            }
+        }
+    }
+    println!("smallest gap over the run: {worst} ({} eps)", worst / eps);
+    assert!(
+        worst > -0.5 * eps,
+        "interpenetration deeper than eps/2: {worst}"
+    );
+}
