@@ -193,6 +193,17 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     }
     atomic_write(&dir.join("timings.csv"), timing_lines.as_bytes())
         .context("cannot write timings.csv")?;
+    // PNG plots of the time series (also after a stopped run: they show what happened). A
+    // plot that cannot be drawn is a warning, not a failed run.
+    match crate::plot::plot_run_dir(&dir) {
+        Ok(files) => log.line(&format!("plots: {}", files.len()))?,
+        Err(e) => {
+            log.line(&format!("warning: no plots: {e:#}"))?;
+            if !opts.quiet {
+                eprintln!("warning: no plots: {e:#}");
+            }
+        }
+    }
     result?;
     Ok(summary)
 }

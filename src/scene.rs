@@ -916,6 +916,25 @@ impl Scene {
                 }
             }
         }
+        if self.vacuum
+            && !self
+                .bodies
+                .iter()
+                .any(|b| matches!(b.kind, BodyKind::Dynamic))
+        {
+            return err(
+                &["vacuum"],
+                "vacuum mode moves dynamic bodies under gravity and contact; this scene has none"
+                    .into(),
+            );
+        }
+        if self.vacuum && !self.initial.is_empty() {
+            return err(
+                &["vacuum"],
+                "vacuum mode has no flow, so an initial vorticity would be ignored; remove `initial`"
+                    .into(),
+            );
+        }
         let c = &self.contact;
         if !(c.kappa.is_finite() && c.kappa >= 0.0) {
             return err(

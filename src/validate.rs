@@ -586,12 +586,13 @@ struct Sedimentation {
     /// Largest relative deviation from rigid motion of the vertical velocity across the disk
     /// during the fall.
     dev: f64,
-    /// Rise of the disk's centre after its first impact.
+    /// Height of the first bounce: the first maximum of the centre's height after the impact
+    /// minus the impact minimum.
     rebound: f64,
     /// Speed at the end of the run (0.3 after the first impact), relative to `vmax`.
     final_speed: f64,
-    /// Local minima of the height after the first impact (1 or 2: impact, landing; more is an
-    /// oscillation).
+    /// Local minima of the height after the first impact, deeper than 1% of the radius (1 or
+    /// 2: impact, landing; more is an oscillation).
     bounces: usize,
     /// Why the run stopped early, if it did.
     failure: Option<String>,
@@ -637,7 +638,6 @@ fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentatio
         }
         if t_contact.is_some() {
             y_impact = y_impact.min(st.center.y);
-            out.rebound = out.rebound.max(st.center.y - y_impact);
             ys.push(st.center.y);
             out.final_speed = st.velocity.length() / out.vmax;
         }
@@ -660,21 +660,26 @@ fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentatio
             }
         }
     }
-    // Local minima of the height after the impact (plateaus count once), ignoring wiggles
-    // below 1e-4 of the disk radius.
-    let tol = 1e-4 * r;
+    // Local minima and maxima of the height after the impact, ignoring wiggles below 1% of
+    // the radius: the rebound is the first maximum above the impact minimum, and more than
+    // two minima (impact, landing) is an oscillation.
+    let tol = 1e-2 * r;
     let mut falling = true;
     let mut extreme = ys.first().copied().unwrap_or(0.0);
+    let mut first_min = None;
+    let mut first_max = None;
     out.bounces = 1;
     for &y in &ys {
         if falling {
             if y > extreme + tol {
+                first_min.get_or_insert(extreme);
                 falling = false;
                 extreme = y;
             } else {
                 extreme = extreme.min(y);
             }
         } else if y < extreme - tol {
+            first_max.get_or_insert(extreme);
             falling = true;
             out.bounces += 1;
             extreme = y;
@@ -682,6 +687,9 @@ fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentatio
             extreme = extreme.max(y);
         }
     }
+    let lo = first_min.unwrap_or(y_impact);
+    let hi = first_max.unwrap_or(if falling { lo } else { extreme });
+    out.rebound = hi - lo;
     Ok(out)
 }
 
@@ -719,7 +727,7 @@ fn sedimentation_2d(quick: bool) -> anyhow::Result<Report> {
         ));
         rep.rows.push(Row::abs(
             format!(
-                "h = 1/{:.0}: at rest 0.3 after the impact, no oscillation (speed < 1% of max, at most 2 minima)",
+                "h = 1/{:.0}: at rest 0.3 after the impact, no oscillation (speed < 1% of max, at most 2 minima > 1% r)",
                 1.0 / h
             ),
             1.0,

@@ -123,3 +123,33 @@ fn missing_file_is_an_error() {
     let e = Scene::load(Path::new("/no/such/scene.ron")).unwrap_err();
     assert!(e.message.contains("cannot read"));
 }
+
+#[test]
+fn vacuum_without_dynamic_bodies_rejected() {
+    let e = err(&GOOD.replace("    name: \"t\",", "    name: \"t\",\n    vacuum: true,"));
+    assert_eq!(e.field.as_deref(), Some("vacuum"), "{e}");
+    assert_eq!(e.line, Some(3), "{e}");
+}
+
+#[test]
+fn contact_pair_with_unknown_body_rejected() {
+    let text = GOOD.replace(
+        "    numerics: (",
+        "    bodies: [(name: \"ball\", shape: Disk(radius: 0.1), position: [0.5, 0.5])],\n    contact: (pairs: [(bodies: (\"ball\", \"wall\"), kappa: 3.0)]),\n    numerics: (",
+    );
+    let e = err(&text);
+    assert!(e.message.contains("`wall`"), "{e}");
+    assert!(e.line.is_some(), "{e}");
+}
+
+#[test]
+fn negative_kappa_rejected() {
+    let e = err(&GOOD.replace(
+        "    numerics: (",
+        "    contact: (kappa: -1.0),\n    numerics: (",
+    ));
+    assert!(
+        e.field.as_deref().is_some_and(|f| f.contains("kappa")),
+        "{e}"
+    );
+}
