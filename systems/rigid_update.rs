@@ -3,7 +3,8 @@
 //! Over one step with the rigid velocity held constant: the centroid x_G ← x_G + V Δt, the
 //! orientation is composed with the rotation by the angle |Ω| Δt about Ω/|Ω| (the paper's
 //! quaternion matrix R^n), q ← rot(Ω Δt) q, and the body frame's origin c turns with it about
-//! x_G: c ← x_G + rot(Ω Δt)(c - x_G). Dynamic bodies use the ū computed from the flow this step,
+//! x_G: c ← x_G + rot(Ω Δt)(c - x_G). A kinematic body's prescription is the motion of its
+//! origin c, which it follows exactly. Dynamic bodies use the ū computed from the flow this step,
 //! kinematic bodies their prescribed motion, static bodies stay.
 
 use crate::bodies::{Body, RigidState, kinematic_velocity};
@@ -23,22 +24,29 @@ pub fn rigid_update(
         if body.is_static() {
             continue;
         }
+        let turn = s.angular_velocity * dt;
+        let q = if turn.length() > 0.0 {
+            DQuat::from_scaled_axis(turn)
+        } else {
+            DQuat::IDENTITY
+        };
         if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {
+            // A prescribed motion is that of the body frame's origin.
             s.velocity = v;
             s.angular_velocity = w;
-        }
-        // The body turns about its centroid and the centroid moves with V.
-        let v = s.velocity;
-        let arm = s.center - s.centroid;
-        s.centroid += v * dt;
-        let turn = s.angular_velocity * dt;
-        if turn.length() > 0.0 {
-            let q = DQuat::from_scaled_axis(turn);
+            let q = DQuat::from_scaled_axis(w * dt);
+            let arm = s.centroid - s.center;
+            s.center += v * dt;
             s.orientation = (q * s.orientation).normalize();
-            s.center = s.centroid + q * arm;
-        } else {
-            s.center = s.centroid + arm;
+            s.centroid = s.center + q * arm;
+            continue;
         }
+        // A free body turns about its centroid, which moves with V.
+        let arm = s.center - s.centroid;
+        let v = s.velocity;
+        s.centroid += v * dt;
+        s.orientation = (q * s.orientation).normalize();
+        s.center = s.centroid + q * arm;
     }
     timer.stop(&mut timings, "rigid_update");
 }
