@@ -54,6 +54,22 @@ pub struct RigidState {
     pub inertia: DMat3,
 }
 
+impl RigidState {
+    /// The pose after `dt` at the current velocities: the centroid moves with V and the body
+    /// turns about it by Ω dt (the orientation composed with rot(Ω dt), the frame's origin
+    /// carried along).
+    pub fn advanced(&self, dt: f64) -> RigidState {
+        let q = DQuat::from_scaled_axis(self.angular_velocity * dt);
+        let centroid = self.centroid + self.velocity * dt;
+        RigidState {
+            center: centroid + q * (self.center - self.centroid),
+            orientation: (q * self.orientation).normalize(),
+            centroid,
+            ..*self
+        }
+    }
+}
+
 /// Material of a body.
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
 pub struct Material {

@@ -284,8 +284,6 @@ pub struct Numerics {
     /// relative to their surface, in cells: the mask is H_ε(φ - offset h), so with an offset
     /// of one half-width the smoothed band lies inside the body and the rigid region does not
     /// reach into the fluid (a fixed cylinder's drag then converges from the first grid).
-    /// Use it for solid obstacles only: it leaves a wall a few cells thick too weak to stop
-    /// the flow through it (a settling sphere in a tube with 2-cell walls fell 60% too fast).
     /// Dynamic bodies always use the centred χ = H_ε(φ). In [0, 2 interface_cells].
     /// Default: 0.
     pub penalization_offset: f64,

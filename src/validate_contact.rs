@@ -28,6 +28,18 @@ fn energy(s: &RigidState, density: f64, g: DVec3, x0: DVec3) -> f64 {
         - m * g.dot(s.center - x0)
 }
 
+/// The leapfrog state at the previous positions: symplectic Euler leaves x_{k+1} and
+/// v_{k+1/2} after step k, so the energy of x_k is taken with v_k = (v_{k-1/2} + v_{k+1/2})/2
+/// (and likewise Ω); `prev` is the state after step k-1, `s` after step k.
+fn leapfrog_mid(prev: &RigidState, s: &RigidState) -> RigidState {
+    RigidState {
+        center: prev.center,
+        velocity: 0.5 * (prev.velocity + s.velocity),
+        angular_velocity: 0.5 * (prev.angular_velocity + s.angular_velocity),
+        ..*s
+    }
+}
+
 /// Paper Fig. 1: a disk dropped in vacuum on a plane rebounds to its drop height.
 pub fn rebound_vacuum(quick: bool) -> anyhow::Result<Report> {
     // The full case takes a few seconds, so `quick` runs it unchanged.
@@ -118,13 +130,7 @@ pub fn ellipsoid_sphere(quick: bool) -> anyhow::Result<Report> {
         let st = dynamic_states(&mut sim);
         let (_, s, rho, contact_energy) = &st[0];
         if let Some(p) = prev {
-            let mid = RigidState {
-                center: p.center,
-                velocity: 0.5 * (p.velocity + s.velocity),
-                angular_velocity: 0.5 * (p.angular_velocity + s.angular_velocity),
-                ..*s
-            };
-            let e = energy(&mid, *rho, g, floor) + contact_energy;
+            let e = energy(&leapfrog_mid(&p, s), *rho, g, floor) + contact_energy;
             let e0 = *e0.get_or_insert(e);
             emax_dev = emax_dev.max(((e - e0) / e0).abs());
         }
@@ -284,13 +290,7 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
             // Leapfrog energy of the previous positions (see `ellipsoid_sphere`).
             let mut e = 0.0;
             for ((_, s, rho, contact), ps) in st.iter().zip(p) {
-                let mid = RigidState {
-                    center: ps.center,
-                    velocity: 0.5 * (ps.velocity + s.velocity),
-                    angular_velocity: 0.5 * (ps.angular_velocity + s.angular_velocity),
-                    ..*s
-                };
-                e += energy(&mid, *rho, g, DVec3::splat(lo)) + contact;
+                e += energy(&leapfrog_mid(ps, s), *rho, g, DVec3::splat(lo)) + contact;
             }
             let e0 = *e0.get_or_insert(e);
             dev = dev.max(((e - e0) / e0).abs());

@@ -469,15 +469,9 @@ fn substepped(
 /// The pose a body reaches after `dt` at its current velocities (static bodies stay).
 fn ahead(body: &Body, s: &RigidState, dt: f64) -> RigidState {
     if dt == 0.0 || body.is_static() {
-        return *s;
-    }
-    let q = glam::DQuat::from_scaled_axis(s.angular_velocity * dt);
-    let centroid = s.centroid + s.velocity * dt;
-    RigidState {
-        center: centroid + q * (s.center - s.centroid),
-        orientation: (q * s.orientation).normalize(),
-        centroid,
-        ..*s
+        *s
+    } else {
+        s.advanced(dt)
     }
 }
 

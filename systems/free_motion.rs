@@ -15,7 +15,7 @@
 use crate::bodies::{Body, ContactState, FreeMotion, GridPatch, Material, RigidState};
 use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
 use crate::grid::Grid;
-use crate::systems::rigid_velocity::{BodySums, integrate};
+use crate::systems::rigid_velocity::{BodySums, mass_properties};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
@@ -44,20 +44,10 @@ pub fn free_motion(
         if body.is_static() {
             continue;
         }
-        let (vol, centroid, _, _, j) =
-            integrate(&grid, patch, state.center, &fields.u, &mut sums, |c, _| c);
-        state.volume = vol;
-        state.centroid = centroid;
-        state.inertia = j;
-        if let Some((v, w)) = crate::bodies::kinematic_velocity(&body.kind, time.t) {
-            state.velocity = v;
-            state.angular_velocity = w;
+        if !mass_properties(&grid, patch, &fields.u, &mut sums, body, time.t, &mut state) {
             continue;
         }
-        if vol <= 0.0 {
-            continue;
-        }
-        let m = mat.density * vol;
+        let (m, j) = (mat.density * state.volume, state.inertia);
         state.velocity += dt * (g + contact.force / m);
         if grid.dim == 2 {
             state.velocity.z = 0.0;

@@ -17,9 +17,7 @@
 //! For static and kinematic bodies the penalization mask is H_ε(φ_i - δ) with
 //! δ = `penalization_offset` h (default 0; one half-width is the useful value): the smoothed
 //! band then lies inside the body, so the rigid region ends at the surface instead of reaching
-//! ε into the fluid. It is not the default because a wall only a few cells thick then leaks:
-//! the sphere-settling tube (2-cell walls and caps) let a d = 0.3 sphere fall at 2.31 instead
-//! of 1.43. With
+//! ε into the fluid. With
 //! δ = 0, a fixed cylinder at Re = 20 (12.8 cells per diameter) has C_d = 2.34, falling to 2.20
 //! at 25.6 cells, first order; with δ = ε it is 2.098 and 2.090 (Dennis & Chang: 2.05
 //! unbounded; this box has 5% blockage). Dynamic bodies keep δ = 0: with the mask moved

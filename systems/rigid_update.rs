@@ -24,12 +24,6 @@ pub fn rigid_update(
         if body.is_static() {
             continue;
         }
-        let turn = s.angular_velocity * dt;
-        let q = if turn.length() > 0.0 {
-            DQuat::from_scaled_axis(turn)
-        } else {
-            DQuat::IDENTITY
-        };
         if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {
             // A prescribed motion is that of the body frame's origin.
             s.velocity = v;
@@ -42,11 +36,7 @@ pub fn rigid_update(
             continue;
         }
         // A free body turns about its centroid, which moves with V.
-        let arm = s.center - s.centroid;
-        let v = s.velocity;
-        s.centroid += v * dt;
-        s.orientation = (q * s.orientation).normalize();
-        s.center = s.centroid + q * arm;
+        *s = s.advanced(dt);
     }
     timer.stop(&mut timings, "rigid_update");
 }

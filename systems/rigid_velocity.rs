@@ -46,7 +46,7 @@ pub fn integrate(
     center: DVec3,
     u: &[Vec<f64>],
     sums: &mut BodySums,
-    weight: impl Fn(f64, f64) -> f64 + Sync,
+    weight: impl Fn(f64) -> f64 + Sync,
 ) -> (f64, DVec3, DVec3, DVec3, DMat3) {
     let [dx, dy, _] = patch.dims;
     if patch.is_empty() {
@@ -62,7 +62,7 @@ pub fn integrate(
             let (b, c) = (r % dy, r / dy);
             let mut s = [0.0; 16];
             for a in 0..dx {
-                let chi = weight(patch.chi[r * dx + a], patch.phi[r * dx + a]);
+                let chi = weight(patch.chi[r * dx + a]);
                 if chi == 0.0 {
                     continue;
                 }
@@ -126,6 +126,30 @@ pub fn integrate(
     (vol, center + d, mom, ang, j)
 }
 
+/// Volume, centroid and inertia of a moving body from χ (the body the density field
+/// carries) into `state`; a kinematic body also takes its prescribed velocities. Returns
+/// whether the body's velocity is still to be found (a dynamic body with a non-empty χ).
+pub fn mass_properties(
+    grid: &Grid,
+    patch: &GridPatch,
+    u: &[Vec<f64>],
+    sums: &mut BodySums,
+    body: &Body,
+    t: f64,
+    state: &mut RigidState,
+) -> bool {
+    let (vol, centroid, _, _, j) = integrate(grid, patch, state.center, u, sums, |c| c);
+    state.volume = vol;
+    state.centroid = centroid;
+    state.inertia = j;
+    if let Some((v, w)) = kinematic_velocity(&body.kind, t) {
+        state.velocity = v;
+        state.angular_velocity = w;
+        return false;
+    }
+    vol > 0.0
+}
+
 /// The rigid-velocity system.
 pub fn rigid_velocity(
     grid: Res<Grid>,
@@ -143,18 +167,7 @@ pub fn rigid_velocity(
             state.angular_velocity = DVec3::ZERO;
             continue;
         }
-        // Mass properties from χ (the body the density field carries).
-        let (vol, centroid, _, _, j) =
-            integrate(&grid, patch, state.center, &fields.u, &mut sums, |c, _| c);
-        state.volume = vol;
-        state.centroid = centroid;
-        state.inertia = j;
-        if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {
-            state.velocity = v;
-            state.angular_velocity = w;
-            continue;
-        }
-        if vol <= 0.0 {
+        if !mass_properties(&grid, patch, &fields.u, &mut sums, body, time.t, &mut state) {
             continue;
         }
         // The rigid velocity is the mean over exactly the weights the implicit penalization
@@ -163,18 +176,10 @@ pub fn rigid_velocity(
         // small but λΔtχ ≫ 1, is dragged along at ū every step: momentum from nothing that
         // made a settling sphere fall ~50% too fast.)
         let ldt = params.lambda * time.dt;
-        let mask = params.penalization_mask(grid.h);
-        let (wvol, wcentroid, mom, ang, wj) = integrate(
-            &grid,
-            patch,
-            state.center,
-            &fields.u,
-            &mut sums,
-            |c, phi| {
-                let m = mask.apply(c, phi);
-                ldt * m / (1.0 + ldt * m)
-            },
-        );
+        let (wvol, wcentroid, mom, ang, wj) =
+            integrate(&grid, patch, state.center, &fields.u, &mut sums, |c| {
+                ldt * c / (1.0 + ldt * c)
+            });
         if wvol <= 0.0 {
             continue;
         }
