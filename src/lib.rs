@@ -11,17 +11,22 @@ pub mod bodies;
 pub mod engine;
 pub mod fields;
 pub mod grid;
+#[cfg(feature = "hdf5")]
+pub mod hdf5_out;
 pub mod init;
 pub mod kernels;
 pub mod levelset;
 pub mod output;
 pub mod plot;
 pub mod run;
+pub mod runlog;
 pub mod scene;
 pub mod schedule;
 pub mod shapes;
+pub mod snapshots;
 pub mod spectral;
 pub mod validate;
+pub mod xdmf;
 
 #[path = "../systems/mod.rs"]
 pub mod systems;

@@ -47,20 +47,11 @@ pub fn atomic_write_with(
     path: &Path,
     f: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> io::Result<()> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| invalid_input(format!("no file name in {}", path.display())))?;
+    let tmp = temp_path(path)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let seq = TMP_SEQ.fetch_add(1, Ordering::Relaxed);
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        name.to_string_lossy(),
-        std::process::id(),
-        seq
-    ));
 
     let result = (|| {
         let file = File::create(&tmp)?;
@@ -72,6 +63,7 @@ pub fn atomic_write_with(
         fs::rename(&tmp, path)
     })();
 
+    let result = result.map_err(|e| disk_full(path, e));
     match result {
         Ok(()) => {
             // Make the rename itself durable; not every platform/filesystem allows this.
@@ -84,6 +76,49 @@ pub fn atomic_write_with(
             let _ = fs::remove_file(&tmp);
             Err(e)
         }
+    }
+}
+
+/// The temporary name `.{filename}.tmp-{pid}-{seq}` next to `path` that an atomic write of
+/// `path` goes through (unique within the process).
+pub fn temp_path(path: &Path) -> io::Result<PathBuf> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| invalid_input(format!("no file name in {}", path.display())))?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let seq = TMP_SEQ.fetch_add(1, Ordering::Relaxed);
+    Ok(dir.join(format!(
+        ".{}.tmp-{}-{}",
+        name.to_string_lossy(),
+        std::process::id(),
+        seq
+    )))
+}
+
+/// Whether `e` says the disk (or the quota) is full.
+pub fn is_disk_full(e: &io::Error) -> bool {
+    // ENOSPC (28) and EDQUOT (122) on Linux.
+    e.kind() == io::ErrorKind::StorageFull
+        || e.kind() == io::ErrorKind::QuotaExceeded
+        || matches!(e.raw_os_error(), Some(28) | Some(122))
+}
+
+/// `e` unchanged, unless it says the disk is full: then an error of the same kind saying
+/// "the disk is full writing PATH", so the user learns what to free, not an errno.
+pub fn disk_full(path: &Path, e: io::Error) -> io::Error {
+    if is_disk_full(&e) && !e.to_string().starts_with("the disk is full") {
+        io::Error::new(
+            e.kind(),
+            format!(
+                "the disk is full writing {} ({e}); free some space or choose another --out",
+                path.display()
+            ),
+        )
+    } else {
+        e
     }
 }
 
@@ -564,19 +599,24 @@ impl PvdSeries {
 pub struct CsvWriter {
     w: BufWriter<File>,
     columns: usize,
+    path: PathBuf,
 }
 
 impl CsvWriter {
     /// Creates (truncates) `path` and writes the comma-separated `header`.
     pub fn create(path: &Path, header: &[&str]) -> io::Result<Self> {
-        let file = File::create(path)?;
-        let mut w = BufWriter::with_capacity(1 << 16, file);
-        w.write_all(header.join(",").as_bytes())?;
-        w.write_all(b"\n")?;
-        w.flush()?;
+        let start = || {
+            let file = File::create(path)?;
+            let mut w = BufWriter::with_capacity(1 << 16, file);
+            w.write_all(header.join(",").as_bytes())?;
+            w.write_all(b"\n")?;
+            w.flush()?;
+            Ok(w)
+        };
         Ok(CsvWriter {
-            w,
+            w: start().map_err(|e| disk_full(path, e))?,
             columns: header.len(),
+            path: path.to_path_buf(),
         })
     }
 
@@ -598,13 +638,15 @@ impl CsvWriter {
             line.push_str(&fmt_f64(*v));
         }
         line.push('\n');
-        self.w.write_all(line.as_bytes())?;
-        self.w.flush()
+        self.w
+            .write_all(line.as_bytes())
+            .and_then(|()| self.w.flush())
+            .map_err(|e| disk_full(&self.path, e))
     }
 
     /// Flushes buffered output to the OS.
     pub fn flush(&mut self) -> io::Result<()> {
-        self.w.flush()
+        self.w.flush().map_err(|e| disk_full(&self.path, e))
     }
 }
 

@@ -2,8 +2,10 @@
 
 use crate::engine::Simulation;
 use crate::fields::Sample;
-use crate::output::{CsvWriter, PvdSeries, VtkField, atomic_write, write_vti};
-use crate::scene::{FieldName, Scene};
+use crate::output::{CsvWriter, atomic_write};
+use crate::runlog::RunLog;
+use crate::scene::Scene;
+use crate::snapshots::Snapshots;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -70,25 +72,33 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
         scene.numerics.end_time = t;
     }
     let dir = prepare_dir(&scene, opts)?;
+    let _log = RunLog::create(&dir.join("log.txt"))?;
+    run_logged(scene, opts, dir).inspect_err(|e| tracing::error!("error: {e:#}"))
+}
+
+/// [`run_scene`] once the run directory and its log are set up.
+fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
-    atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
-        .context("cannot write scene.ron")?;
-    let end = scene.numerics.end_time;
-    let every = scene.output.every;
-    let mut sim = Simulation::new(scene)?;
-    let grid = sim.grid().clone();
-    let mut log = Log::create(&dir.join("log.txt"))?;
-    log.line(&format!(
-        "tumble {} run of scene `{}`: {}D grid {}x{}x{} (h = {}), end time {end}, {} threads",
+    let grid = scene.grid();
+    tracing::info!(
+        "tumble {} run of scene `{}`: {}D grid {}x{}x{} (h = {}), end time {}, {} threads, output in {}",
         env!("CARGO_PKG_VERSION"),
-        sim.scene().name,
+        scene.name,
         grid.dim,
         grid.n[0],
         grid.n[1],
         grid.n[2],
         grid.h,
-        rayon::current_num_threads()
-    ))?;
+        scene.numerics.end_time,
+        rayon::current_num_threads(),
+        dir.display()
+    );
+    tracing::info!("{}", crate::runlog::scene_summary(&scene));
+    atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
+        .context("cannot write scene.ron")?;
+    let mut sim = Simulation::new(scene)?;
+    let end = sim.scene().numerics.end_time;
+    let every = sim.scene().output.every;
     let mut series = CsvWriter::create(
         &dir.join("series.csv"),
         &["t", "dt", "energy", "enstrophy", "circulation", "max_omega"],
@@ -96,9 +106,9 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     .context("cannot create series.csv")?;
     let mut bodies_csv = BodiesCsv::create(&dir.join("bodies.csv"), &sim)?;
     let mut contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
-    let mut pvd = PvdSeries::new(dir.join("fields.pvd"));
-    let mut snapshot = 0usize;
-    write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
+    let mut snaps = Snapshots::new(&dir, &sim);
+    snaps.record(&mut sim);
+    write_snapshot(&sim, &mut snaps)?;
     write_row(&mut series, &sim.sample())?;
     if let Some(b) = bodies_csv.as_mut() {
         b.rows(&mut sim)?;
@@ -121,6 +131,7 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
                 if let Some(c) = contacts_csv.as_mut() {
                     c.rows(&sim)?;
                 }
+                snaps.record(&mut sim);
                 for &(name, s) in &sim.timings().last {
                     match totals.iter_mut().find(|e| e.0 == name) {
                         Some(e) => e.1 += s,
@@ -153,7 +164,7 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
             if next_out.is_some_and(|o| sim.time() >= o * (1.0 - 1e-12))
                 || sim.time() >= end * (1.0 - 1e-12)
             {
-                write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
+                write_snapshot(&sim, &mut snaps)?;
                 if let Some(e) = every {
                     next_out = next_out.map(|o| o + e);
                 }
@@ -169,6 +180,7 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     if let Some(c) = contacts_csv.as_mut() {
         c.flush()?;
     }
+    snaps.finish()?;
     let wall = wall0.elapsed().as_secs_f64();
     let summary = RunSummary {
         dir: dir.clone(),
@@ -178,12 +190,20 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
         wall,
     };
     match &result {
-        Ok(()) => log.line(&format!(
-            "finished: {} steps to t = {}, {:.2} s wall",
-            summary.steps, summary.last.t, wall
-        ))?,
-        Err(e) => log.line(&format!("stopped: {e:#}"))?,
+        Ok(()) => tracing::info!(
+            "finished: {} steps to t = {}, {} snapshots, {:.2} s wall",
+            summary.steps,
+            summary.last.t,
+            snaps.count(),
+            wall
+        ),
+        Err(_) => tracing::error!(
+            "stopped at step {}, t = {} (the error follows)",
+            summary.steps,
+            summary.last.t
+        ),
     }
+    crate::runlog::timings_table(&summary.system_seconds, summary.steps, wall);
     let mut timing_lines = String::from("system,seconds_total,seconds_per_step\n");
     for (name, s) in &summary.system_seconds {
         timing_lines.push_str(&format!(
@@ -196,9 +216,9 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     // PNG plots of the time series (also after a stopped run: they show what happened). A
     // plot that cannot be drawn is a warning, not a failed run.
     match crate::plot::plot_run_dir(&dir) {
-        Ok(files) => log.line(&format!("plots: {}", files.len()))?,
+        Ok(files) => tracing::info!("plots: {}", files.len()),
         Err(e) => {
-            log.line(&format!("warning: no plots: {e:#}"))?;
+            tracing::warn!("no plots: {e:#}");
             if !opts.quiet {
                 eprintln!("warning: no plots: {e:#}");
             }
@@ -226,77 +246,11 @@ fn write_row(series: &mut CsvWriter, s: &Sample) -> anyhow::Result<()> {
         .context("cannot write series.csv")
 }
 
-fn write_snapshot(
-    sim: &Simulation,
-    dir: &Path,
-    pvd: &mut PvdSeries,
-    snapshot: &mut usize,
-) -> anyhow::Result<()> {
-    let f = sim.fields();
-    let omega: Vec<&[f64]> = f.omega().iter().map(|c| c.as_slice()).collect();
-    let u: Vec<&[f64]> = f.u.iter().map(|c| c.as_slice()).collect();
-    let bf = sim.world.get_resource::<crate::bodies::BodyFields>();
-    let rho: Vec<&[f64]> = bf.map(|b| vec![b.rho.as_slice()]).unwrap_or_default();
-    let chi: Vec<&[f64]> = bf.map(|b| vec![b.chi.as_slice()]).unwrap_or_default();
-    let phi_clamped: Vec<f64> = bf
-        .map(|b| b.phi.iter().map(|p| p.max(-1e30)).collect())
-        .unwrap_or_default();
-    let phi: Vec<&[f64]> = if bf.is_some() {
-        vec![phi_clamped.as_slice()]
-    } else {
-        Vec::new()
-    };
-    let mut fields = Vec::new();
-    for name in &sim.scene().output.fields {
-        match name {
-            FieldName::Omega => fields.push(VtkField {
-                name: "omega",
-                components: &omega,
-            }),
-            FieldName::Velocity => fields.push(VtkField {
-                name: "velocity",
-                components: &u,
-            }),
-            FieldName::Density => {
-                if bf.is_some() {
-                    fields.push(VtkField {
-                        name: "density",
-                        components: &rho,
-                    });
-                    fields.push(VtkField {
-                        name: "chi",
-                        components: &chi,
-                    });
-                    fields.push(VtkField {
-                        name: "phi",
-                        components: &phi,
-                    });
-                }
-            }
-        }
-    }
-    let file = format!("fields_{:06}.vti", *snapshot);
-    write_vti(&dir.join(&file), sim.grid(), sim.time(), &fields)
-        .with_context(|| format!("cannot write {file}"))?;
-    pvd.push(sim.time(), &file)
-        .context("cannot write fields.pvd")?;
-    *snapshot += 1;
+/// Write a snapshot and log a one-line summary of the state.
+fn write_snapshot(sim: &Simulation, snaps: &mut Snapshots) -> anyhow::Result<()> {
+    let files = snaps.write(sim)?;
+    crate::runlog::output_line(sim, &files);
     Ok(())
-}
-
-/// A plain text log in the run directory.
-struct Log(std::fs::File);
-
-impl Log {
-    fn create(path: &Path) -> anyhow::Result<Self> {
-        Ok(Log(std::fs::File::create(path).with_context(|| {
-            format!("cannot create {}", path.display())
-        })?))
-    }
-    fn line(&mut self, s: &str) -> anyhow::Result<()> {
-        use std::io::Write;
-        writeln!(self.0, "{s}").context("cannot write log.txt")
-    }
 }
 
 /// `bodies.csv`: one row per moving body per step.

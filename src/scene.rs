@@ -396,6 +396,27 @@ pub struct Output {
     pub fields: Vec<FieldName>,
     /// Output directory; `tumble run --out` overrides it. Default: `runs/<name>`.
     pub dir: Option<String>,
+    /// File formats of the field snapshots: `Vtk` (`fields_NNNNNN.vti` + `fields.pvd`) and/or
+    /// `Hdf5` (`fields_NNNNNN.h5` + `fields.xmf`, and the body and contact series in
+    /// `series.h5`; needs a build with `--features hdf5`). At least one. Default: `[Vtk]`.
+    pub formats: Vec<OutputFormat>,
+}
+
+/// A file format for field snapshots.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// VTK XML image data (`.vti`) indexed by a ParaView `.pvd` collection.
+    Vtk,
+    /// HDF5 (one `.h5` file per snapshot) indexed by an XDMF `.xmf` temporal collection, which
+    /// ParaView and VisIt open as one time series.
+    Hdf5,
+}
+
+impl Output {
+    /// Whether snapshots are written in `format`.
+    pub fn has_format(&self, format: OutputFormat) -> bool {
+        self.formats.contains(&format)
+    }
 }
 
 impl Default for Output {
@@ -404,6 +425,7 @@ impl Default for Output {
             every: None,
             fields: vec![FieldName::Omega, FieldName::Velocity, FieldName::Density],
             dir: None,
+            formats: vec![OutputFormat::Vtk],
         }
     }
 }
@@ -979,6 +1001,21 @@ impl Scene {
             && !(e.is_finite() && e > 0.0)
         {
             return err(&["output", "every"], format!("must be positive, got {e}"));
+        }
+        if self.output.formats.is_empty() {
+            return err(
+                &["output", "formats"],
+                "needs at least one format: [Vtk], [Hdf5] or [Vtk, Hdf5]".into(),
+            );
+        }
+        if self.output.has_format(OutputFormat::Hdf5) && !cfg!(feature = "hdf5") {
+            return err(
+                &["output", "formats"],
+                "Hdf5 output needs a tumble built with the `hdf5` feature (install the HDF5 \
+                 library, e.g. `apt-get install libhdf5-dev`, then `cargo build --release \
+                 --features hdf5`); this build writes only Vtk"
+                    .into(),
+            );
         }
         Ok(())
     }

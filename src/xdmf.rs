@@ -1,0 +1,176 @@
+//! The XDMF index (`fields.xmf`) of HDF5 snapshots: an XDMF 2 temporal collection of uniform
+//! grids that ParaView (*XDMF Reader*) and VisIt open as one time series.
+//!
+//! Each snapshot is a `3DCoRectMesh` (`2DCoRectMesh` in 2D) with node-centred attributes
+//! pointing at datasets of its HDF5 file (`fields_NNNNNN.h5:/omega`). XDMF lists dimensions,
+//! origins and spacings slowest axis first (z y x), which is how the datasets are stored: the
+//! grid's flat order is x fastest, so a field is a C-order array of shape `(nz, ny, nx)` (or
+//! `(ny, nx)` in 2D), vectors with a trailing axis of 3 components (z = 0 in 2D, as ParaView
+//! wants 3-vectors).
+//!
+//! [`XdmfSeries::push`] rewrites the whole file atomically after each snapshot, so it only
+//! lists complete snapshots.
+
+use crate::grid::Grid;
+use crate::output::{atomic_write, fmt_f64};
+use std::fmt::Write as _;
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// One attribute of a snapshot: a dataset at the root of the snapshot's HDF5 file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XdmfAttribute {
+    /// Attribute and dataset name.
+    pub name: String,
+    /// 1 (scalar) or 3 (vector).
+    pub components: usize,
+}
+
+/// One snapshot in the index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XdmfEntry {
+    /// Simulated time.
+    pub time: f64,
+    /// The HDF5 file, relative to the index's directory.
+    pub file: String,
+    /// Its fields.
+    pub attributes: Vec<XdmfAttribute>,
+}
+
+/// The dataset shape of a field on `grid` with `components` components, slowest axis first:
+/// `[nz, ny, nx]` or `[ny, nx]`, with a trailing `3` for vectors.
+pub fn dataset_shape(grid: &Grid, components: usize) -> Vec<usize> {
+    let [nx, ny, nz] = grid.n;
+    let mut s = if grid.dim == 3 {
+        vec![nz, ny, nx]
+    } else {
+        vec![ny, nx]
+    };
+    if components > 1 {
+        s.push(3);
+    }
+    s
+}
+
+/// An XDMF temporal collection, rewritten on every [`push`](XdmfSeries::push).
+#[derive(Clone, Debug)]
+pub struct XdmfSeries {
+    path: PathBuf,
+    grid: Grid,
+    entries: Vec<XdmfEntry>,
+}
+
+impl XdmfSeries {
+    /// A series of snapshots on `grid`, indexed in `path` (nothing written until a push).
+    pub fn new(path: impl Into<PathBuf>, grid: &Grid) -> Self {
+        XdmfSeries {
+            path: path.into(),
+            grid: grid.clone(),
+            entries: Vec::new(),
+        }
+    }
+
+    /// The index file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The listed snapshots, in push order.
+    pub fn entries(&self) -> &[XdmfEntry] {
+        &self.entries
+    }
+
+    /// Add a snapshot (its HDF5 file complete) and rewrite the index atomically. On failure
+    /// the entry is not kept.
+    pub fn push(&mut self, entry: XdmfEntry) -> io::Result<()> {
+        self.entries.push(entry);
+        let r = atomic_write(&self.path, self.text().as_bytes());
+        if r.is_err() {
+            self.entries.pop();
+        }
+        r
+    }
+
+    /// The XML text of the index.
+    pub fn text(&self) -> String {
+        let g = &self.grid;
+        let h = fmt_f64(g.h);
+        let (topology, geometry, dims, origin, spacing) = if g.dim == 3 {
+            (
+                "3DCoRectMesh",
+                "ORIGIN_DXDYDZ",
+                format!("{} {} {}", g.n[2], g.n[1], g.n[0]),
+                format!(
+                    "{} {} {}",
+                    fmt_f64(g.origin[2]),
+                    fmt_f64(g.origin[1]),
+                    fmt_f64(g.origin[0])
+                ),
+                format!("{h} {h} {h}"),
+            )
+        } else {
+            (
+                "2DCoRectMesh",
+                "ORIGIN_DXDY",
+                format!("{} {}", g.n[1], g.n[0]),
+                format!("{} {}", fmt_f64(g.origin[1]), fmt_f64(g.origin[0])),
+                format!("{h} {h}"),
+            )
+        };
+        let nd = g.dim;
+        let mut s = String::new();
+        s.push_str("<?xml version=\"1.0\" ?>\n");
+        s.push_str("<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n");
+        s.push_str("<Xdmf Version=\"2.0\">\n  <Domain>\n");
+        s.push_str(
+            "    <Grid Name=\"fields\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+        );
+        for (k, e) in self.entries.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "      <Grid Name=\"snapshot{k:06}\" GridType=\"Uniform\">"
+            );
+            let _ = writeln!(s, "        <Time Value=\"{}\"/>", fmt_f64(e.time));
+            let _ = writeln!(
+                s,
+                "        <Topology TopologyType=\"{topology}\" Dimensions=\"{dims}\"/>"
+            );
+            let _ = writeln!(s, "        <Geometry GeometryType=\"{geometry}\">");
+            for (name, v) in [("Origin", &origin), ("Spacing", &spacing)] {
+                let _ = writeln!(
+                    s,
+                    "          <DataItem Name=\"{name}\" Dimensions=\"{nd}\" NumberType=\"Float\" \
+                     Precision=\"8\" Format=\"XML\">{v}</DataItem>"
+                );
+            }
+            s.push_str("        </Geometry>\n");
+            for a in &e.attributes {
+                let shape = dataset_shape(g, a.components)
+                    .iter()
+                    .map(|n| n.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                let kind = if a.components == 1 {
+                    "Scalar"
+                } else {
+                    "Vector"
+                };
+                let _ = writeln!(
+                    s,
+                    "        <Attribute Name=\"{}\" AttributeType=\"{kind}\" Center=\"Node\">",
+                    a.name
+                );
+                let _ = writeln!(
+                    s,
+                    "          <DataItem Dimensions=\"{shape}\" NumberType=\"Float\" \
+                     Precision=\"8\" Format=\"HDF\">{}:/{}</DataItem>",
+                    e.file, a.name
+                );
+                s.push_str("        </Attribute>\n");
+            }
+            s.push_str("      </Grid>\n");
+        }
+        s.push_str("    </Grid>\n  </Domain>\n</Xdmf>\n");
+        s
+    }
+}
