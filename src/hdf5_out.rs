@@ -18,20 +18,15 @@ use std::path::Path;
 
 /// An I/O error from an HDF5 error; "disk full" is recognised from the library's error stack.
 fn h5_err(path: &Path, e: hdf5::Error) -> io::Error {
-    let msg = e.to_string();
+    let msg = e.to_string().replace('\n', " ");
     let lower = msg.to_lowercase();
-    let kind = if lower.contains("no space left") || lower.contains("errno = 28") {
-        io::ErrorKind::StorageFull
-    } else {
-        io::ErrorKind::Other
-    };
-    disk_full(
-        path,
-        io::Error::new(
-            kind,
-            format!("HDF5 error writing {}: {msg}", path.display()),
-        ),
-    )
+    if lower.contains("no space left") || lower.contains("errno = 28") {
+        return disk_full(
+            path,
+            io::Error::new(io::ErrorKind::StorageFull, "no space left on device"),
+        );
+    }
+    io::Error::other(format!("HDF5 error writing {}: {msg}", path.display()))
 }
 
 /// Write an HDF5 file atomically: `f` fills a new file at a temporary name, which is then

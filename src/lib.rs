@@ -17,6 +17,7 @@ pub mod init;
 pub mod kernels;
 pub mod levelset;
 pub mod output;
+pub mod overlap;
 pub mod plot;
 pub mod run;
 pub mod runlog;

@@ -126,12 +126,22 @@ fn main() -> ExitCode {
                         .map(|(n, t)| format!("{n} {:.4}", t / steps))
                         .collect();
                     println!("  seconds per step: {}", per.join(", "));
-                    println!("  open {} in ParaView", s.dir.join("fields.pvd").display());
+                    let index = ["fields.pvd", "fields.xmf"]
+                        .map(|f| s.dir.join(f))
+                        .into_iter()
+                        .find(|p| p.exists())
+                        .unwrap_or_else(|| s.dir.join("fields.pvd"));
+                    println!("  open {} in ParaView", index.display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
                     eprintln!("error: {e:#}");
-                    ExitCode::from(1)
+                    // A bad output directory is a usage mistake, like a bad scene.
+                    if e.is::<tumble::run::BadOutputDir>() {
+                        ExitCode::from(2)
+                    } else {
+                        ExitCode::from(1)
+                    }
                 }
             }
         }

@@ -40,6 +40,19 @@ pub struct RunSummary {
     pub wall: f64,
 }
 
+/// An output directory that cannot be used (it exists, is a file, or cannot be created): a
+/// mistake on the command line or in the scene, so `tumble run` exits with status 2.
+#[derive(Debug)]
+pub struct BadOutputDir(pub String);
+
+impl std::fmt::Display for BadOutputDir {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadOutputDir {}
+
 /// Resolve the output directory and make it (refusing to overwrite without `force`).
 pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> {
     let dir = match (&opts.out, &scene.output.dir) {
@@ -47,18 +60,34 @@ pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> 
         (None, Some(d)) => PathBuf::from(d),
         (None, None) => Path::new("runs").join(&scene.name),
     };
+    let bad = |m: String| anyhow::Error::new(BadOutputDir(m));
     if dir.exists() {
+        if !dir.is_dir() {
+            return Err(bad(format!(
+                "the output directory {} is a file, not a directory; choose another --out",
+                dir.display()
+            )));
+        }
         if !opts.force {
-            anyhow::bail!(
+            return Err(bad(format!(
                 "the output directory {} exists; pass --force to replace it or --out to choose another",
                 dir.display()
-            );
+            )));
         }
-        std::fs::remove_dir_all(&dir)
-            .with_context(|| format!("cannot remove the old output directory {}", dir.display()))?;
+        std::fs::remove_dir_all(&dir).map_err(|e| {
+            bad(format!(
+                "cannot remove the old output directory {}: {e}",
+                dir.display()
+            ))
+        })?;
     }
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+    std::fs::create_dir_all(&dir).map_err(|e| {
+        bad(format!(
+            "cannot create the output directory {}: {}",
+            dir.display(),
+            crate::output::disk_full(&dir, e)
+        ))
+    })?;
     Ok(dir)
 }
 

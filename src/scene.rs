@@ -475,27 +475,42 @@ impl Scene {
         let mut scene = Scene::parse(&text, &file, &stem)?;
         scene.base_dir = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
         // Mesh files are read now, so a missing or broken mesh is a scene error with its line.
+        let mut geoms = Vec::with_capacity(scene.bodies.len());
         for (i, b) in scene.bodies.iter().enumerate() {
-            if let Err(e) = b.shape.build(&scene.base_dir) {
-                // The i-th `shape:` key belongs to the i-th body.
-                let mut from = 0;
-                let mut pos = None;
-                for _ in 0..=i {
-                    match find_key(&text[from..], "shape") {
-                        Some(off) => {
-                            pos = Some(from + off);
-                            from += off + 5;
-                        }
-                        None => break,
-                    }
+            match b.shape.build(&scene.base_dir) {
+                Ok(g) => geoms.push(g),
+                Err(e) => {
+                    return Err(SceneError {
+                        file: file.clone(),
+                        line: body_key_line(&text, i, "shape"),
+                        field: Some("bodies.shape".into()),
+                        message: format!("body `{}`: {e}", b.name),
+                    });
                 }
-                return Err(SceneError {
-                    file: file.clone(),
-                    line: pos.map(|p| text[..p].matches('\n').count() + 1),
-                    field: Some("bodies.shape".into()),
-                    message: format!("body `{}`: {e}", b.name),
-                });
             }
+        }
+        if let Some(o) = crate::overlap::initial_overlap(&scene, &geoms) {
+            let (a, b) = (&scene.bodies[o.a], &scene.bodies[o.b]);
+            let dim = scene.dim();
+            return Err(SceneError {
+                file: file.clone(),
+                line: body_key_line(&text, o.b, "position"),
+                field: Some("bodies.position".into()),
+                message: format!(
+                    "bodies `{}` and `{}` overlap at the start: the point ({}) is {:.3e} deep \
+                     inside both (more than half a cell, h/2 = {:.3e}); move them apart so that \
+                     they at most touch",
+                    a.name,
+                    b.name,
+                    o.point.to_array()[..dim]
+                        .iter()
+                        .map(|x| format!("{x:.4}"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    o.depth,
+                    scene.grid().h / 2.0
+                ),
+            });
         }
         Ok(scene)
     }
@@ -1058,6 +1073,26 @@ fn locate(text: &str, path: &[&str]) -> Option<usize> {
         }
     }
     found.map(|pos| text[..pos].matches('\n').count() + 1)
+}
+
+/// The line of `key` in the `i`-th body (found after the body's `shape:` key, which every
+/// body has; `shape` itself for `key == "shape"`).
+fn body_key_line(text: &str, i: usize, key: &str) -> Option<usize> {
+    let mut from = 0;
+    let mut pos = None;
+    for _ in 0..=i {
+        let off = find_key(&text[from..], "shape")?;
+        pos = Some(from + off);
+        from += off + 5;
+    }
+    let mut pos = pos?;
+    if key != "shape" {
+        // The body's key may come before or after its shape: look back to the body's opening
+        // parenthesis, then forwards.
+        let start = text[..pos].rfind("(").unwrap_or(0);
+        pos = start + find_key(&text[start..], key).unwrap_or(pos - start);
+    }
+    Some(text[..pos].matches('\n').count() + 1)
 }
 
 fn find_key(text: &str, key: &str) -> Option<usize> {
