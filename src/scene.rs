@@ -430,6 +430,9 @@ impl Default for Output {
     }
 }
 
+/// The most grid nodes a scene may ask for (2^32; about 35 GB per scalar field).
+pub const MAX_NODES: u64 = 1 << 32;
+
 /// A problem with a scene, located as precisely as possible.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneError {
@@ -667,6 +670,32 @@ impl Scene {
                     }
                 }
             }
+        }
+        // Node counts in f64 (no overflow), bounded so every index and byte count fits.
+        let nodes: Vec<f64> = match (&self.domain.cells, self.domain.h) {
+            (Some(c), _) => c.iter().map(|&n| n as f64).collect(),
+            (_, Some(h)) => self.domain.extent.iter().map(|e| (e / h).round()).collect(),
+            (None, None) => Vec::new(),
+        };
+        let total: f64 = nodes.iter().product();
+        if total > MAX_NODES as f64 {
+            let field: &'static str = if self.domain.cells.is_some() {
+                "cells"
+            } else {
+                "h"
+            };
+            return err(
+                &["domain", field],
+                format!(
+                    "the grid would have {total:.3e} nodes ({}), more than the {MAX_NODES} \
+                     (2^32) this version can address; use fewer cells",
+                    nodes
+                        .iter()
+                        .map(|n| format!("{n}"))
+                        .collect::<Vec<_>>()
+                        .join(" x ")
+                ),
+            );
         }
         let f = &self.fluid;
         if !(f.density.is_finite() && f.density > 0.0) {

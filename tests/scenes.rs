@@ -153,3 +153,16 @@ fn negative_kappa_rejected() {
         "{e}"
     );
 }
+
+#[test]
+fn absurd_grid_rejected_without_overflow() {
+    let e = err(&GOOD.replace(
+        "cells: [16, 16]",
+        "cells: [18446744073709551615, 18446744073709551615]",
+    ));
+    assert_eq!(e.field.as_deref(), Some("domain.cells"), "{e}");
+    assert_eq!(e.line, Some(5), "{e}");
+    assert!(e.message.contains("nodes"), "{e}");
+    let e = err(&GOOD.replace("cells: [16, 16]", "h: 1e-300"));
+    assert_eq!(e.field.as_deref(), Some("domain.h"), "{e}");
+}
