@@ -324,3 +324,57 @@ fn peak_memory_is_reported_on_linux() {
         assert!(m > 1024 * 1024, "peak RSS {m} bytes is implausibly small");
     }
 }
+
+/// Two runs in one thread, one after the other, and one in another thread at the same time:
+/// each writes its own log.txt (a scoped tracing subscriber per run, nothing global).
+#[test]
+fn each_run_logs_to_its_own_log_txt() {
+    use tumble::run::{RunOptions, run_scene};
+    let base = std::env::temp_dir().join(format!("tumble-log-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    let scene = |name: &str| {
+        tumble::scene::Scene::parse(
+            &format!(
+                r#"Scene(
+    name: "{name}",
+    domain: (extent: [1.0, 1.0], cells: [16, 16]),
+    numerics: (end_time: 0.05),
+    initial: [LambOseen(center: [0.5, 0.5], circulation: 1.0, core_radius: 0.1)],
+    bodies: [(name: "disk", shape: Disk(radius: 0.1), position: [0.5, 0.7])],
+)"#
+            ),
+            "log.ron",
+            name,
+        )
+        .unwrap()
+    };
+    let run = |name: &str| {
+        let opts = RunOptions {
+            out: Some(base.join(name)),
+            quiet: true,
+            ..Default::default()
+        };
+        run_scene(scene(name), &opts).unwrap();
+        std::fs::read_to_string(base.join(name).join("log.txt")).unwrap()
+    };
+    let other = std::thread::scope(|s| {
+        let h = s.spawn(|| run("third"));
+        for name in ["first", "second"] {
+            let log = run(name);
+            assert!(log.contains(&format!("run of scene `{name}`")), "{log}");
+            assert_eq!(log.matches("run of scene").count(), 1, "{log}");
+            assert!(log.contains("scene: 1 bodies (1 dynamic"), "{log}");
+            assert!(log.contains("output: step 0, t = 0.000000"), "{log}");
+            assert!(log.contains("fastest body `disk`"), "{log}");
+            assert!(log.contains("finished: "), "{log}");
+            assert!(log.contains("timings over"), "{log}");
+            assert!(log.contains("transport"), "{log}");
+            assert!(!log.contains('\x1b'), "no ANSI escapes: {log}");
+        }
+        h.join().unwrap()
+    });
+    assert!(other.contains("run of scene `third`"), "{other}");
+    assert_eq!(other.matches("run of scene").count(), 1, "{other}");
+    assert!(base.join("first/timings.csv").exists());
+    let _ = std::fs::remove_dir_all(&base);
+}

@@ -166,3 +166,33 @@ fn absurd_grid_rejected_without_overflow() {
     let e = err(&GOOD.replace("cells: [16, 16]", "h: 1e-300"));
     assert_eq!(e.field.as_deref(), Some("domain.h"), "{e}");
 }
+
+#[test]
+fn output_formats_default_to_vtk_and_hdf5_needs_the_feature() {
+    use tumble::scene::OutputFormat;
+    let s = Scene::parse(GOOD, "good.ron", "good").unwrap();
+    assert_eq!(s.output.formats, vec![OutputFormat::Vtk]);
+    let text = GOOD.replace(
+        "    numerics: (",
+        "    output: (\n        formats: [Vtk, Hdf5],\n    ),\n    numerics: (",
+    );
+    let r = Scene::parse(&text, "h5.ron", "h5");
+    if cfg!(feature = "hdf5") {
+        assert!(r.is_ok());
+    } else {
+        let e = r.unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("output.formats"), "{e}");
+        assert_eq!(e.line, Some(11), "{e}");
+        assert!(e.to_string().contains("h5.ron") && e.message.contains("--features hdf5"));
+    }
+    let e = err(&GOOD.replace(
+        "    numerics: (",
+        "    output: (formats: []),\n    numerics: (",
+    ));
+    assert_eq!(e.field.as_deref(), Some("output.formats"), "{e}");
+    let e = err(&GOOD.replace(
+        "    numerics: (",
+        "    output: (formats: [Vtk, Netcdf]),\n    numerics: (",
+    ));
+    assert!(e.message.contains("Netcdf"), "{e}");
+}
