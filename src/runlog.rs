@@ -23,15 +23,36 @@ impl RunLog {
         let file = File::create(path)
             .map_err(|e| crate::output::disk_full(path, e))
             .with_context(|| format!("cannot create {}", path.display()))?;
+        Ok(Self::to_file(file))
+    }
+
+    /// Open `path` for appending (a continued run) and make it the log of this thread until
+    /// the value is dropped.
+    pub fn append(path: &Path) -> anyhow::Result<Self> {
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .with_context(|| format!("cannot open {}", path.display()))?;
+        Ok(Self::to_file(file))
+    }
+
+    /// Log one line at level INFO (what the former hand-written log's `line` did).
+    pub fn line(&mut self, s: &str) -> anyhow::Result<()> {
+        tracing::info!("{s}");
+        Ok(())
+    }
+
+    fn to_file(file: File) -> Self {
         let subscriber = tracing_subscriber::fmt()
             .with_writer(Mutex::new(file))
             .with_ansi(false)
             .with_target(false)
             .with_max_level(tracing::Level::INFO)
             .finish();
-        Ok(RunLog {
+        RunLog {
             _guard: tracing::subscriber::set_default(subscriber),
-        })
+        }
     }
 }
 
