@@ -580,6 +580,16 @@ impl CsvWriter {
         })
     }
 
+    /// Opens an existing CSV file of `columns` columns to append rows after its last line (a
+    /// restarted run continuing its time series).
+    pub fn append(path: &Path, columns: usize) -> io::Result<Self> {
+        let file = fs::OpenOptions::new().append(true).open(path)?;
+        Ok(CsvWriter {
+            w: BufWriter::with_capacity(1 << 16, file),
+            columns,
+        })
+    }
+
     /// Appends one row; values are written so that they parse back exactly. Fails with
     /// `InvalidInput` if the number of values differs from the number of header columns.
     pub fn row(&mut self, values: &[f64]) -> io::Result<()> {

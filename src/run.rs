@@ -1,5 +1,7 @@
-//! `tumble run`: a scene from start to end with outputs, progress and timings.
+//! `tumble run`: a scene from start to end with outputs, progress and timings; checkpoints
+//! and restarts (see [`crate::checkpoint`]).
 
+use crate::checkpoint::{self, Checkpoint, CheckpointError, Interrupted, RunProgress};
 use crate::engine::Simulation;
 use crate::fields::Sample;
 use crate::output::{CsvWriter, PvdSeries, VtkField, atomic_write, write_vti};
@@ -21,6 +23,8 @@ pub struct RunOptions {
     pub force: bool,
     /// No progress bar or progress lines.
     pub quiet: bool,
+    /// Simulated time between checkpoints, overriding the scene's `output.checkpoint_every`.
+    pub checkpoint_every: Option<f64>,
 }
 
 /// What a finished run reports.
@@ -60,8 +64,8 @@ pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> 
     Ok(dir)
 }
 
-/// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
-pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+/// Apply the command line's end time and checkpoint interval to `scene`.
+fn apply_overrides(scene: &mut Scene, opts: &RunOptions) -> anyhow::Result<()> {
     if let Some(t) = opts.until {
         anyhow::ensure!(
             t.is_finite() && t > 0.0,
@@ -69,6 +73,36 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
         );
         scene.numerics.end_time = t;
     }
+    if let Some(c) = opts.checkpoint_every {
+        anyhow::ensure!(
+            c.is_finite() && c > 0.0,
+            "--checkpoint-every must be a positive time, got {c}"
+        );
+        scene.output.checkpoint_every = Some(c);
+    }
+    Ok(())
+}
+
+/// A run in progress: the simulation, its open outputs and where they stand.
+struct Run {
+    sim: Simulation,
+    dir: PathBuf,
+    log: Log,
+    series: CsvWriter,
+    bodies_csv: Option<BodiesCsv>,
+    contacts_csv: Option<ContactsCsv>,
+    pvd: PvdSeries,
+    snapshot: usize,
+    next_out: Option<f64>,
+    /// The next checkpoint time, when checkpoints are periodic.
+    next_ckpt: Option<f64>,
+    /// (t, step) of the checkpoint in the run directory, if this run wrote or started from one.
+    last_ckpt: Option<(f64, u64)>,
+}
+
+/// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
+pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+    apply_overrides(&mut scene, opts)?;
     let dir = prepare_dir(&scene, opts)?;
     let wall0 = Instant::now();
     atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
@@ -95,7 +129,7 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     )
     .context("cannot create series.csv")?;
     let mut bodies_csv = BodiesCsv::create(&dir.join("bodies.csv"), &sim)?;
-    let mut contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
+    let contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
     let mut pvd = PvdSeries::new(dir.join("fields.pvd"));
     let mut snapshot = 0usize;
     write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
@@ -103,23 +137,284 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     if let Some(b) = bodies_csv.as_mut() {
         b.rows(&mut sim)?;
     }
+    let next_ckpt = sim.scene().output.checkpoint_every;
+    let run = Run {
+        sim,
+        dir,
+        log,
+        series,
+        bodies_csv,
+        contacts_csv,
+        pvd,
+        snapshot,
+        next_out: every.map(|e| e.min(end)),
+        next_ckpt,
+        last_ckpt: None,
+    };
+    drive(run, opts, wall0)
+}
 
+/// Continue the run of `checkpoint` (a file in its run directory) to the scene's end time (or
+/// `opts.until`), appending to the run directory's outputs. `scene`, if given (with its file
+/// for messages), must be the checkpoint's; so must the run directory's `scene.ron`. The time
+/// series are cut back to the checkpoint's rows and the `.pvd` to its snapshots first.
+pub fn restart_run(
+    checkpoint: &Path,
+    scene: Option<(&Path, Scene)>,
+    opts: &RunOptions,
+) -> anyhow::Result<RunSummary> {
+    let wall0 = Instant::now();
+    let ck = Checkpoint::load(checkpoint)?;
+    let mut run_scene = ck.scene()?;
+    if let Some((file, given)) = &scene
+        && !checkpoint::same_run(given, &run_scene)
+    {
+        return Err(ck
+            .error(format!(
+                "the scene {} is not the one the checkpoint was written with (only the end \
+                 time and the checkpoint interval may change on a restart; see its scene in \
+                 the run directory's scene.ron)",
+                file.display()
+            ))
+            .into());
+    }
+    let dir = match checkpoint.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let scene_file = dir.join("scene.ron");
+    if let Ok(text) = std::fs::read_to_string(&scene_file) {
+        let same = Scene::parse(&text, &scene_file.display().to_string(), "")
+            .is_ok_and(|s| checkpoint::same_run(&s, &run_scene));
+        if !same {
+            return Err(ck
+                .error(format!(
+                    "{} describes another scene: the checkpoint does not belong to this run \
+                     directory",
+                    scene_file.display()
+                ))
+                .into());
+        }
+    }
+    apply_overrides(&mut run_scene, opts)?;
+    let (t0, step0) = (ck.time.t, ck.time.step);
+    let end = run_scene.numerics.end_time;
+    if opts.until.is_some() && end <= t0 {
+        return Err(ck
+            .error(format!(
+                "--until {end} is not after the checkpoint's time t = {t0}"
+            ))
+            .into());
+    }
+    let p = &ck.progress;
+    let csvs = [
+        ("series.csv", Some(p.series_len)),
+        ("bodies.csv", p.bodies_len),
+        ("contacts.csv", p.contacts_len),
+    ];
+    for (name, len) in csvs {
+        let Some(len) = len else { continue };
+        let have = std::fs::metadata(dir.join(name)).map(|m| m.len()).ok();
+        if have.is_none_or(|h| h < len) {
+            return Err(ck
+                .error(format!(
+                    "{} has {} bytes, fewer than the {len} it had at the checkpoint: the run \
+                     directory does not match the checkpoint",
+                    dir.join(name).display(),
+                    have.map_or("no".to_string(), |h| h.to_string())
+                ))
+                .into());
+        }
+    }
+    // Checked: from here on the run directory is changed.
+    checkpoint::remove_temp_files(&dir)
+        .with_context(|| format!("cannot clean up {}", dir.display()))?;
+    for (name, len) in csvs {
+        let Some(len) = len else { continue };
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(dir.join(name))
+            .and_then(|f| f.set_len(len))
+            .with_context(|| format!("cannot cut {name} back to the checkpoint"))?;
+    }
+    // Snapshots written after the checkpoint are written again (or not, with another end).
+    let mut k = p.snapshots as usize;
+    loop {
+        let f = dir.join(format!("fields_{k:06}.vti"));
+        if !f.exists() {
+            break;
+        }
+        std::fs::remove_file(&f).with_context(|| format!("cannot remove {}", f.display()))?;
+        k += 1;
+    }
+    let mut pvd = PvdSeries::new(dir.join("fields.pvd"));
+    for (t, f) in &p.pvd {
+        pvd.push(*t, f).context("cannot write fields.pvd")?;
+    }
+    atomic_write(&scene_file, run_scene.to_ron().as_bytes()).context("cannot write scene.ron")?;
+    let sim = ck.simulation(run_scene)?;
+    let log_path = dir.join("log.txt");
+    let mut log = Log(std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&log_path)
+        .with_context(|| format!("cannot open {}", log_path.display()))?);
+    log.line(&format!(
+        "tumble {} restart from {} at step {step0}, t = {t0}: end time {end}, {} threads",
+        env!("CARGO_PKG_VERSION"),
+        checkpoint.display(),
+        rayon::current_num_threads()
+    ))?;
+    let series = CsvWriter::append(&dir.join("series.csv"), 6).context("cannot open series.csv")?;
+    let append = |name: &str| -> anyhow::Result<std::io::BufWriter<std::fs::File>> {
+        let path = dir.join(name);
+        let f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&path)
+            .with_context(|| format!("cannot open {}", path.display()))?;
+        Ok(std::io::BufWriter::new(f))
+    };
+    let bodies_csv = match p.bodies_len {
+        Some(_) => Some(BodiesCsv(append("bodies.csv")?)),
+        None => None,
+    };
+    let contacts_csv = match p.contacts_len {
+        Some(_) => Some(ContactsCsv(append("contacts.csv")?)),
+        None => None,
+    };
+    let next_ckpt = sim
+        .scene()
+        .output
+        .checkpoint_every
+        .map(|c| next_multiple(t0, c));
+    let run = Run {
+        sim,
+        dir,
+        log,
+        series,
+        bodies_csv,
+        contacts_csv,
+        pvd,
+        snapshot: p.snapshots as usize,
+        next_out: p.next_out,
+        next_ckpt,
+        last_ckpt: Some((t0, step0)),
+    };
+    drive(run, opts, wall0)
+}
+
+/// The first multiple of `every` after `t`.
+fn next_multiple(t: f64, every: f64) -> f64 {
+    let mut k = (t / every).floor() + 1.0;
+    if k * every <= t * (1.0 + 1e-12) {
+        k += 1.0;
+    }
+    k * every
+}
+
+impl Run {
+    /// Write a checkpoint of the current state (after flushing and syncing the time series it
+    /// records the lengths of).
+    fn checkpoint(&mut self) -> anyhow::Result<()> {
+        self.series.flush().context("cannot write series.csv")?;
+        if let Some(b) = self.bodies_csv.as_mut() {
+            b.flush()?;
+        }
+        if let Some(c) = self.contacts_csv.as_mut() {
+            c.flush()?;
+        }
+        let synced_len = |name: &str| -> anyhow::Result<u64> {
+            let path = self.dir.join(name);
+            let f = std::fs::File::open(&path)
+                .with_context(|| format!("cannot open {}", path.display()))?;
+            f.sync_all()
+                .with_context(|| format!("cannot sync {}", path.display()))?;
+            Ok(f.metadata()?.len())
+        };
+        let progress = RunProgress {
+            next_out: self.next_out,
+            snapshots: self.snapshot as u64,
+            pvd: self.pvd.entries().to_vec(),
+            series_len: synced_len("series.csv")?,
+            bodies_len: match self.bodies_csv {
+                Some(_) => Some(synced_len("bodies.csv")?),
+                None => None,
+            },
+            contacts_len: match self.contacts_csv {
+                Some(_) => Some(synced_len("contacts.csv")?),
+                None => None,
+            },
+        };
+        let path = self.dir.join(checkpoint::FILE_NAME);
+        checkpoint::save(&path, &mut self.sim, &progress)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        let (t, step) = (self.sim.time(), self.sim.steps());
+        self.last_ckpt = Some((t, step));
+        self.log
+            .line(&format!("checkpoint at step {step}, t = {t}"))
+    }
+
+    /// After a step whose outputs are written: checkpoint if one is due or a stop was asked
+    /// for, and stop if so.
+    fn after_step(&mut self, end: f64) -> anyhow::Result<()> {
+        let t = self.sim.time();
+        let due = self.next_ckpt.is_some_and(|c| t >= c * (1.0 - 1e-12));
+        let stop = checkpoint::interrupt_requested() && t < end * (1.0 - 1e-12);
+        if due || stop {
+            self.checkpoint()?;
+            if let Some(every) = self.sim.scene().output.checkpoint_every {
+                self.next_ckpt = Some(next_multiple(t, every));
+            }
+        }
+        if stop {
+            return Err(Interrupted {
+                step: self.sim.steps(),
+                t,
+                checkpoint: self.dir.join(checkpoint::FILE_NAME),
+            }
+            .into());
+        }
+        Ok(())
+    }
+
+    /// The message of a failed step, naming the last good checkpoint if there is one.
+    fn failed(&self, e: anyhow::Error) -> anyhow::Error {
+        match self.last_ckpt {
+            Some((t, step)) => {
+                let path = self.dir.join(checkpoint::FILE_NAME);
+                anyhow::anyhow!(
+                    "{e:#}; the last good checkpoint is {} (step {step}, t = {t})",
+                    path.display()
+                )
+            }
+            None => e,
+        }
+    }
+}
+
+/// The stepping loop of a run, then its closing outputs (timings, plots, the log's last line).
+fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunSummary> {
+    let end = run.sim.scene().numerics.end_time;
+    let every = run.sim.scene().output.every;
     let bar = progress_bar(opts.quiet);
     let mut totals: Vec<(&'static str, f64)> = Vec::new();
-    let mut next_out = every.map(|e| e.min(end));
-    let mut last_tenth = 0u32;
+    let mut last_tenth = ((run.sim.time() / end).clamp(0.0, 1.0) * 10.0).floor() as u32;
     let result: anyhow::Result<()> = (|| {
-        while sim.time() < end * (1.0 - 1e-12) {
-            let stop = next_out.map_or(end, |o| o.min(end));
-            sim.set_stop_at(Some(stop));
-            while sim.time() < stop * (1.0 - 1e-12) {
-                sim.step()?;
-                write_row(&mut series, &sim.sample())?;
-                if let Some(b) = bodies_csv.as_mut() {
-                    b.rows(&mut sim)?;
+        let run = &mut run;
+        while run.sim.time() < end * (1.0 - 1e-12) {
+            let stop = run.next_out.map_or(end, |o| o.min(end));
+            run.sim.set_stop_at(Some(stop));
+            while run.sim.time() < stop * (1.0 - 1e-12) {
+                if let Err(e) = run.sim.step() {
+                    return Err(run.failed(e));
                 }
-                if let Some(c) = contacts_csv.as_mut() {
-                    c.rows(&sim)?;
+                let sim = &mut run.sim;
+                write_row(&mut run.series, &sim.sample())?;
+                if let Some(b) = run.bodies_csv.as_mut() {
+                    b.rows(sim)?;
+                }
+                if let Some(c) = run.contacts_csv.as_mut() {
+                    c.rows(sim)?;
                 }
                 for &(name, s) in &sim.timings().last {
                     match totals.iter_mut().find(|e| e.0 == name) {
@@ -149,19 +444,41 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
                         wall0.elapsed().as_secs_f64()
                     );
                 }
-            }
-            if next_out.is_some_and(|o| sim.time() >= o * (1.0 - 1e-12))
-                || sim.time() >= end * (1.0 - 1e-12)
-            {
-                write_snapshot(&sim, &dir, &mut pvd, &mut snapshot)?;
-                if let Some(e) = every {
-                    next_out = next_out.map(|o| o + e);
+                // At the end of the interval the snapshot comes first, then the checkpoint.
+                if run.sim.time() < stop * (1.0 - 1e-12) {
+                    run.after_step(end)?;
                 }
             }
+            if run
+                .next_out
+                .is_some_and(|o| run.sim.time() >= o * (1.0 - 1e-12))
+                || run.sim.time() >= end * (1.0 - 1e-12)
+            {
+                write_snapshot(&run.sim, &run.dir, &mut run.pvd, &mut run.snapshot)?;
+                if let Some(e) = every {
+                    run.next_out = run.next_out.map(|o| o + e);
+                }
+            }
+            run.after_step(end)?;
+        }
+        // A final checkpoint, from which the run can be continued (`--restart --until`).
+        if run.sim.scene().output.checkpoint_every.is_some()
+            && run.last_ckpt.is_none_or(|(_, s)| s != run.sim.steps())
+        {
+            run.checkpoint()?;
         }
         Ok(())
     })();
     bar.finish_and_clear();
+    let Run {
+        sim,
+        dir,
+        mut log,
+        mut series,
+        mut bodies_csv,
+        mut contacts_csv,
+        ..
+    } = run;
     series.flush().context("cannot write series.csv")?;
     if let Some(b) = bodies_csv.as_mut() {
         b.flush()?;
@@ -182,6 +499,7 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
             "finished: {} steps to t = {}, {:.2} s wall",
             summary.steps, summary.last.t, wall
         ))?,
+        Err(e) if e.downcast_ref::<Interrupted>().is_some() => log.line(&format!("{e}"))?,
         Err(e) => log.line(&format!("stopped: {e:#}"))?,
     }
     let mut timing_lines = String::from("system,seconds_total,seconds_per_step\n");
@@ -206,6 +524,11 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
     }
     result?;
     Ok(summary)
+}
+
+/// Whether `e` (from [`run_scene`] or [`restart_run`]) is a refused checkpoint or restart.
+pub fn is_refused_restart(e: &anyhow::Error) -> bool {
+    e.downcast_ref::<CheckpointError>().is_some()
 }
 
 fn progress_bar(quiet: bool) -> ProgressBar {

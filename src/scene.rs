@@ -396,6 +396,11 @@ pub struct Output {
     pub fields: Vec<FieldName>,
     /// Output directory; `tumble run --out` overrides it. Default: `runs/<name>`.
     pub dir: Option<String>,
+    /// Simulated time between checkpoints (`checkpoint.bin` in the run directory, replaced
+    /// each time; `tumble run --restart` continues from it), time units; `tumble run
+    /// --checkpoint-every` overrides it. `None` writes a checkpoint only when the run is
+    /// interrupted (Ctrl-C, SIGTERM). Default: None.
+    pub checkpoint_every: Option<f64>,
 }
 
 impl Default for Output {
@@ -404,6 +409,7 @@ impl Default for Output {
             every: None,
             fields: vec![FieldName::Omega, FieldName::Velocity, FieldName::Density],
             dir: None,
+            checkpoint_every: None,
         }
     }
 }
@@ -979,6 +985,14 @@ impl Scene {
             && !(e.is_finite() && e > 0.0)
         {
             return err(&["output", "every"], format!("must be positive, got {e}"));
+        }
+        if let Some(e) = self.output.checkpoint_every
+            && !(e.is_finite() && e > 0.0)
+        {
+            return err(
+                &["output", "checkpoint_every"],
+                format!("must be positive, got {e}"),
+            );
         }
         Ok(())
     }
