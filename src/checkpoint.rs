@@ -33,7 +33,7 @@
 //! same directory, fsync, rename), so a killed run leaves the previous checkpoint or the new
 //! one, never a torn file.
 
-use crate::bodies::{Body, ContactState, FreeMotion, Hydro, RigidState};
+use crate::bodies::{Body, ContactState, FreeMotion, Hydro, PreviousVelocity, RigidState};
 use crate::engine::Simulation;
 use crate::fields::{Fields, Sample, SimTime};
 use crate::output::atomic_write_with;
@@ -165,6 +165,8 @@ pub struct BodyState {
     pub contact: ContactState,
     /// Angular momentum carried in vacuum.
     pub free: FreeMotion,
+    /// The previous step's ū (the body's acceleration in the baroclinic term).
+    pub prev: PreviousVelocity,
 }
 
 /// A checkpoint read back (see the module docs for what it holds).
@@ -362,18 +364,24 @@ impl<'a> Dec<'a> {
 
 /// The saved state of every body of `sim`, sorted by id.
 pub fn body_states(sim: &mut Simulation) -> Vec<BodyState> {
-    let mut q = sim
-        .world
-        .query::<(&Body, &RigidState, &Hydro, &ContactState, &FreeMotion)>();
+    let mut q = sim.world.query::<(
+        &Body,
+        &RigidState,
+        &Hydro,
+        &ContactState,
+        &FreeMotion,
+        &PreviousVelocity,
+    )>();
     let mut out: Vec<BodyState> = q
         .iter(&sim.world)
-        .map(|(b, r, h, c, f)| BodyState {
+        .map(|(b, r, h, c, f, p)| BodyState {
             id: b.id,
             name: b.name.clone(),
             rigid: *r,
             hydro: *h,
             contact: *c,
             free: *f,
+            prev: *p,
         })
         .collect();
     out.sort_by_key(|b| b.id);
@@ -471,6 +479,8 @@ pub fn write_to(w: impl Write, sim: &mut Simulation, progress: &RunProgress) -> 
             }
             None => e.u8(0)?,
         }
+        e.vec3(b.prev.velocity)?;
+        e.vec3(b.prev.angular_velocity)?;
     }
     // Trailer.
     let len = e.len;
@@ -593,8 +603,9 @@ impl Checkpoint {
             &mut Hydro,
             &mut ContactState,
             &mut FreeMotion,
+            &mut PreviousVelocity,
         )>();
-        for (b, mut r, mut h, mut c, mut f) in q.iter_mut(&mut sim.world) {
+        for (b, mut r, mut h, mut c, mut f, mut p) in q.iter_mut(&mut sim.world) {
             let s = &self.bodies[self
                 .bodies
                 .binary_search_by_key(&b.id, |s| s.id)
@@ -603,6 +614,7 @@ impl Checkpoint {
             *h = s.hydro;
             *c = s.contact;
             *f = s.free;
+            *p = s.prev;
         }
         Ok(())
     }
@@ -742,6 +754,10 @@ fn decode(b: &[u8], file: &Path) -> Result<Checkpoint, String> {
         let free = FreeMotion {
             angular_momentum: if d.flag()? { Some(d.vec3()?) } else { None },
         };
+        let prev = PreviousVelocity {
+            velocity: d.vec3()?,
+            angular_velocity: d.vec3()?,
+        };
         bodies.push(BodyState {
             id,
             name,
@@ -757,6 +773,7 @@ fn decode(b: &[u8], file: &Path) -> Result<Checkpoint, String> {
             hydro,
             contact,
             free,
+            prev,
         });
     }
     if d.pos != b.len() {

@@ -290,6 +290,20 @@ pub struct Numerics {
     /// Use the Boussinesq form of the baroclinic term, ∇ρ × g / ρ_F (eq. 18), instead of the
     /// full form (eq. 28). Default: false.
     pub boussinesq: bool,
+    /// The fluid acceleration Du/Dt on the bodies' interfaces in the baroclinic term (eq. 28):
+    /// `Rigid`, the acceleration of the body's rigid motion (no slip), or `Eulerian`, the grid
+    /// estimate ∂u/∂t + (u·∇)u from the last two velocity fields (the paper's). Default: Rigid.
+    pub interface_acceleration: InterfaceAcceleration,
+}
+
+/// How the baroclinic term estimates Du/Dt where the density varies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum InterfaceAcceleration {
+    /// The acceleration of the rigid motion of the body the node belongs to.
+    #[default]
+    Rigid,
+    /// ∂u/∂t + (u·∇)u on the grid, from the last two velocity fields.
+    Eulerian,
 }
 
 /// The kernel that interpolates velocity onto particles and remeshes them.
@@ -316,6 +330,7 @@ impl Default for Numerics {
             interface_cells: 1.0,
             penalization_offset: 0.0,
             boussinesq: false,
+            interface_acceleration: InterfaceAcceleration::Rigid,
         }
     }
 }
