@@ -70,6 +70,17 @@ impl RigidState {
     }
 }
 
+/// The rigid velocity ū of the previous step (V, Ω), kept by `rigid_update`: with the
+/// current one it gives the body's acceleration, which the baroclinic term uses as the
+/// acceleration of the fluid on the body's interface (no slip).
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct PreviousVelocity {
+    /// V of the previous step.
+    pub velocity: DVec3,
+    /// Ω of the previous step.
+    pub angular_velocity: DVec3,
+}
+
 /// Material of a body.
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
 pub struct Material {
@@ -229,16 +240,51 @@ pub struct BodyFields {
     pub phi: Vec<f64>,
     /// Velocity change made by the penalization this step (scratch, `dim` components).
     pub du: Vec<Vec<f64>>,
+    /// The body whose level set is the largest at each node (its `Body::id`), [`NO_BODY`]
+    /// where no body's patch reaches.
+    pub owner: Vec<u32>,
+    /// Per body id: the rigid acceleration field's parameters this step (scratch of the
+    /// baroclinic system, sized at spawn).
+    pub rigid_accel: Vec<RigidAccel>,
+}
+
+/// No body at this node.
+pub const NO_BODY: u32 = u32::MAX;
+
+/// The acceleration of a rigid motion: a(x) = A + α × r + Ω × (Ω × r), r = x - x_G.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RigidAccel {
+    /// Acceleration of the centroid A.
+    pub linear: DVec3,
+    /// Angular acceleration α.
+    pub angular: DVec3,
+    /// Angular velocity Ω.
+    pub omega: DVec3,
+    /// Centroid x_G.
+    pub centroid: DVec3,
+    /// The body's density as the density field counts it (the fluid's for static bodies).
+    pub density: f64,
+}
+
+impl RigidAccel {
+    /// The acceleration at `x`.
+    #[inline]
+    pub fn at(&self, x: DVec3) -> DVec3 {
+        let r = x - self.centroid;
+        self.linear + self.angular.cross(r) + self.omega.cross(self.omega.cross(r))
+    }
 }
 
 impl BodyFields {
-    /// Fields for `grid`, filled with the fluid's density.
-    pub fn new(grid: &Grid, rho_fluid: f64) -> Self {
+    /// Fields for `grid` and `n_bodies` bodies, filled with the fluid's density.
+    pub fn new(grid: &Grid, rho_fluid: f64, n_bodies: usize) -> Self {
         BodyFields {
             rho: vec![rho_fluid; grid.len()],
             chi: vec![0.0; grid.len()],
             phi: vec![f64::NEG_INFINITY; grid.len()],
             du: vec![vec![0.0; grid.len()]; grid.dim],
+            owner: vec![NO_BODY; grid.len()],
+            rigid_accel: vec![RigidAccel::default(); n_bodies],
         }
     }
 }
@@ -359,6 +405,10 @@ pub fn spawn_bodies(world: &mut World, scene: &Scene, grid: &Grid) -> anyhow::Re
                 ..Default::default()
             },
             FreeMotion::default(),
+            PreviousVelocity {
+                velocity,
+                angular_velocity,
+            },
             contact_points,
         ));
     }

@@ -42,7 +42,11 @@ impl Simulation {
         world.insert_resource(Timings::default());
         let n_bodies = crate::bodies::spawn_bodies(&mut world, &scene, &grid)?;
         if n_bodies > 0 {
-            world.insert_resource(crate::bodies::BodyFields::new(&grid, scene.fluid.density));
+            world.insert_resource(crate::bodies::BodyFields::new(
+                &grid,
+                scene.fluid.density,
+                n_bodies,
+            ));
             world.insert_resource(crate::systems::rigid_velocity::BodySums::new(&grid));
             world.insert_resource(crate::systems::collision::ContactParams::from_scene(
                 &scene, grid.h,

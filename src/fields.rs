@@ -96,6 +96,8 @@ pub struct Params {
     pub penalization_offset: f64,
     /// Boussinesq form of the baroclinic term.
     pub boussinesq: bool,
+    /// Du/Dt on the interfaces in the baroclinic term.
+    pub interface_acceleration: crate::scene::InterfaceAcceleration,
     /// Whether the scene has bodies.
     pub has_bodies: bool,
 }
@@ -156,6 +158,7 @@ impl Params {
             interface_cells: scene.numerics.interface_cells,
             penalization_offset: scene.numerics.penalization_offset,
             boussinesq: scene.numerics.boussinesq,
+            interface_acceleration: scene.numerics.interface_acceleration,
             has_bodies: !scene.bodies.is_empty(),
         }
     }

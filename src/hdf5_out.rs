@@ -242,3 +242,59 @@ pub fn write_series(path: &Path, s: &Series) -> io::Result<()> {
         Ok(())
     })
 }
+
+/// An I/O error for an HDF5 file that cannot be read.
+fn read_err(path: &Path, e: hdf5::Error) -> io::Error {
+    io::Error::other(format!(
+        "cannot read {}: {}",
+        path.display(),
+        e.to_string().replace('\n', " ")
+    ))
+}
+
+/// The `time` attribute of the snapshot file at `path`.
+pub fn read_time(path: &Path) -> io::Result<f64> {
+    (|| hdf5::File::open(path)?.attr("time")?.read_scalar::<f64>())().map_err(|e| read_err(path, e))
+}
+
+/// Read the data of the `series.h5` at `path` into `s`, a [`Series`] made for the run's scene
+/// (its names, ids and body names set; it is what the file was written from): the global
+/// columns, each moving body's series (found by its `id` attribute; a body the file lacks is
+/// left empty) and the contacts. Values come back exactly as written.
+pub fn read_series(path: &Path, s: &mut Series) -> io::Result<()> {
+    (|| -> hdf5::Result<()> {
+        let file = hdf5::File::open(path)?;
+        for (name, v) in &mut s.global {
+            *v = file.dataset(&format!("series/{name}"))?.read_raw()?;
+        }
+        if !s.bodies.is_empty() {
+            for g in file.group("bodies")?.groups()? {
+                let id: u64 = g.attr("id")?.read_scalar()?;
+                let Some(b) = s.bodies.iter_mut().find(|b| b.id as u64 == id) else {
+                    continue;
+                };
+                b.t = g.dataset("t")?.read_raw()?;
+                for (k, v) in [
+                    ("center", &mut b.center),
+                    ("velocity", &mut b.velocity),
+                    ("angular_velocity", &mut b.angular_velocity),
+                    ("orientation", &mut b.orientation),
+                    ("force", &mut b.force),
+                    ("torque", &mut b.torque),
+                ] {
+                    *v = g.dataset(k)?.read_raw()?;
+                }
+            }
+        }
+        if let Some(c) = s.contacts.as_mut() {
+            let g = file.group("contacts")?;
+            c.t = g.dataset("t")?.read_raw()?;
+            c.body_a = g.dataset("body_a")?.read_raw()?;
+            c.body_b = g.dataset("body_b")?.read_raw()?;
+            c.gap = g.dataset("gap")?.read_raw()?;
+            c.normal_force = g.dataset("normal_force")?.read_raw()?;
+        }
+        Ok(())
+    })()
+    .map_err(|e| read_err(path, e))
+}

@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bodies;
+pub mod checkpoint;
 pub mod engine;
 pub mod fields;
 pub mod grid;

@@ -25,10 +25,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a scene and write its outputs (series.csv, VTK snapshots with a .pvd, log).
+    /// Run a scene and write its outputs (series.csv, snapshots in the scene's formats, log),
+    /// or continue a run from its checkpoint.
     Run {
-        /// The scene file (RON).
-        scene: PathBuf,
+        /// The scene file (RON). With --restart it may be left out; if given, it must be the
+        /// checkpoint's scene.
+        #[arg(required_unless_present = "restart")]
+        scene: Option<PathBuf>,
         /// Output directory (default: runs/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -41,6 +44,13 @@ enum Command {
         /// No progress output.
         #[arg(long)]
         quiet: bool,
+        /// Write a checkpoint (checkpoint.bin in the run directory) every T of simulated time,
+        /// overriding the scene's output.checkpoint_every.
+        #[arg(long, value_name = "T")]
+        checkpoint_every: Option<f64>,
+        /// Continue a run from a checkpoint, appending to its run directory (the checkpoint's).
+        #[arg(long, value_name = "CHECKPOINT", conflicts_with_all = ["out", "force"])]
+        restart: Option<PathBuf>,
     },
     /// Load and validate a scene, print what it will compute, run nothing.
     Check {
@@ -95,8 +105,10 @@ fn main() -> ExitCode {
             until,
             force,
             quiet,
+            checkpoint_every,
+            restart,
         } => {
-            let scene = match load(&scene) {
+            let loaded = match scene.as_deref().map(load).transpose() {
                 Ok(s) => s,
                 Err(code) => return code,
             };
@@ -105,8 +117,21 @@ fn main() -> ExitCode {
                 until,
                 force,
                 quiet,
+                checkpoint_every,
             };
-            match run_scene(scene, &opts) {
+            // Ctrl-C and SIGTERM stop the run after its current step, with a checkpoint.
+            if let Err(e) = tumble::checkpoint::install_interrupt_handler() {
+                eprintln!("warning: {e:#}");
+            }
+            let result = match (restart, loaded) {
+                (Some(ck), loaded) => {
+                    let given = scene.as_deref().zip(loaded);
+                    tumble::run::restart_run(&ck, given, &opts)
+                }
+                (None, Some(scene)) => run_scene(scene, &opts),
+                (None, None) => unreachable!("clap requires a scene without --restart"),
+            };
+            match result {
                 Ok(s) => {
                     println!(
                         "done: {} steps to t = {:.6} in {:.1} s; outputs in {}",
@@ -119,7 +144,7 @@ fn main() -> ExitCode {
                         "  final energy {:.6e}, enstrophy {:.6e}, max|ω| {:.4e}",
                         s.last.energy, s.last.enstrophy, s.last.max_omega
                     );
-                    let steps = s.steps.max(1) as f64;
+                    let steps = s.steps_run.max(1) as f64;
                     let per: Vec<String> = s
                         .system_seconds
                         .iter()
@@ -134,10 +159,18 @@ fn main() -> ExitCode {
                     println!("  open {} in ParaView", index.display());
                     ExitCode::SUCCESS
                 }
+                Err(e)
+                    if e.downcast_ref::<tumble::checkpoint::Interrupted>()
+                        .is_some() =>
+                {
+                    eprintln!("{e}");
+                    ExitCode::from(130)
+                }
                 Err(e) => {
                     eprintln!("error: {e:#}");
-                    // A bad output directory is a usage mistake, like a bad scene.
-                    if e.is::<tumble::run::BadOutputDir>() {
+                    // A bad output directory is a usage mistake, like a bad scene; so is a
+                    // checkpoint that cannot be restarted.
+                    if e.is::<tumble::run::BadOutputDir>() || tumble::run::is_refused_restart(&e) {
                         ExitCode::from(2)
                     } else {
                         ExitCode::from(1)

@@ -564,11 +564,29 @@ impl PvdSeries {
         &self.entries
     }
 
+    /// A series written to `path` that already lists `entries` (a restarted run's; nothing
+    /// is written until [`write`](PvdSeries::write) or the next `push`).
+    pub fn with_entries(path: impl Into<PathBuf>, entries: Vec<(f64, String)>) -> Self {
+        PvdSeries {
+            path: path.into(),
+            entries,
+        }
+    }
+
     /// Adds a snapshot (`file_name` relative to the `.pvd`'s directory) and rewrites the
     /// `.pvd` atomically. On failure the entry is not kept, so the in-memory list matches
     /// the file on disk.
     pub fn push(&mut self, time: f64, file_name: &str) -> io::Result<()> {
         self.entries.push((time, file_name.to_string()));
+        let r = self.write();
+        if r.is_err() {
+            self.entries.pop();
+        }
+        r
+    }
+
+    /// Rewrites the `.pvd` atomically with the listed snapshots.
+    pub fn write(&self) -> io::Result<()> {
         let mut s = String::new();
         s.push_str("<?xml version=\"1.0\"?>\n");
         s.push_str(
@@ -585,11 +603,7 @@ impl PvdSeries {
             );
         }
         s.push_str("  </Collection>\n</VTKFile>\n");
-        let r = atomic_write(&self.path, s.as_bytes());
-        if r.is_err() {
-            self.entries.pop();
-        }
-        r
+        atomic_write(&self.path, s.as_bytes())
     }
 }
 
@@ -616,6 +630,17 @@ impl CsvWriter {
         Ok(CsvWriter {
             w: start().map_err(|e| disk_full(path, e))?,
             columns: header.len(),
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Opens an existing CSV file of `columns` columns to append rows after its last line (a
+    /// restarted run continuing its time series).
+    pub fn append(path: &Path, columns: usize) -> io::Result<Self> {
+        let file = fs::OpenOptions::new().append(true).open(path)?;
+        Ok(CsvWriter {
+            w: BufWriter::with_capacity(1 << 16, file),
+            columns,
             path: path.to_path_buf(),
         })
     }

@@ -1,5 +1,7 @@
-//! `tumble run`: a scene from start to end with outputs, progress and timings.
+//! `tumble run`: a scene from start to end with outputs, progress and timings; checkpoints
+//! and restarts (see [`crate::checkpoint`]).
 
+use crate::checkpoint::{self, Checkpoint, CheckpointError, Interrupted, RunProgress};
 use crate::engine::Simulation;
 use crate::fields::Sample;
 use crate::output::{CsvWriter, atomic_write};
@@ -23,6 +25,8 @@ pub struct RunOptions {
     pub force: bool,
     /// No progress bar or progress lines.
     pub quiet: bool,
+    /// Simulated time between checkpoints, overriding the scene's `output.checkpoint_every`.
+    pub checkpoint_every: Option<f64>,
 }
 
 /// What a finished run reports.
@@ -30,11 +34,14 @@ pub struct RunOptions {
 pub struct RunSummary {
     /// Where the outputs are.
     pub dir: PathBuf,
-    /// Steps taken.
+    /// Steps of the run (for a restarted run, counted from the start of the first run).
     pub steps: u64,
+    /// Steps taken by this call (fewer than `steps` for a restarted run): what
+    /// `system_seconds` covers.
+    pub steps_run: u64,
     /// The final state.
     pub last: Sample,
-    /// Total seconds per system, in schedule order.
+    /// Total seconds per system over the `steps_run` steps, in schedule order.
     pub system_seconds: Vec<(&'static str, f64)>,
     /// Wall-clock seconds of the whole run.
     pub wall: f64,
@@ -91,8 +98,8 @@ pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> 
     Ok(dir)
 }
 
-/// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
-pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+/// Apply the command line's end time and checkpoint interval to `scene`.
+fn apply_overrides(scene: &mut Scene, opts: &RunOptions) -> anyhow::Result<()> {
     if let Some(t) = opts.until {
         anyhow::ensure!(
             t.is_finite() && t > 0.0,
@@ -100,13 +107,49 @@ pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSumma
         );
         scene.numerics.end_time = t;
     }
+    if let Some(c) = opts.checkpoint_every {
+        anyhow::ensure!(
+            c.is_finite() && c > 0.0,
+            "--checkpoint-every must be a positive time, got {c}"
+        );
+        scene.output.checkpoint_every = Some(c);
+    }
+    Ok(())
+}
+
+/// Log an error that ends a run (an interruption is logged where it happens, as a warning).
+fn log_error(e: &anyhow::Error) {
+    if e.downcast_ref::<Interrupted>().is_none() {
+        tracing::error!("error: {e:#}");
+    }
+}
+
+/// A run in progress: the simulation, its open outputs and where they stand.
+struct Run {
+    sim: Simulation,
+    dir: PathBuf,
+    series: CsvWriter,
+    bodies_csv: Option<BodiesCsv>,
+    contacts_csv: Option<ContactsCsv>,
+    /// The field snapshots (VTK and/or HDF5, with their indexes) and `series.h5`.
+    snaps: Snapshots,
+    next_out: Option<f64>,
+    /// The next checkpoint time, when checkpoints are periodic.
+    next_ckpt: Option<f64>,
+    /// (t, step) of the checkpoint in the run directory, if this run wrote or started from one.
+    last_ckpt: Option<(f64, u64)>,
+}
+
+/// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
+pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+    apply_overrides(&mut scene, opts)?;
     let dir = prepare_dir(&scene, opts)?;
     let _log = RunLog::create(&dir.join("log.txt"))?;
-    run_logged(scene, opts, dir).inspect_err(|e| tracing::error!("error: {e:#}"))
+    start_run(scene, opts, dir).inspect_err(log_error)
 }
 
 /// [`run_scene`] once the run directory and its log are set up.
-fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<RunSummary> {
+fn start_run(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
     let grid = scene.grid();
     tracing::info!(
@@ -125,16 +168,16 @@ fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<R
     tracing::info!("{}", crate::runlog::scene_summary(&scene));
     atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
         .context("cannot write scene.ron")?;
+    let end = scene.numerics.end_time;
+    let every = scene.output.every;
     let mut sim = Simulation::new(scene)?;
-    let end = sim.scene().numerics.end_time;
-    let every = sim.scene().output.every;
     let mut series = CsvWriter::create(
         &dir.join("series.csv"),
         &["t", "dt", "energy", "enstrophy", "circulation", "max_omega"],
     )
     .context("cannot create series.csv")?;
     let mut bodies_csv = BodiesCsv::create(&dir.join("bodies.csv"), &sim)?;
-    let mut contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
+    let contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
     let mut snaps = Snapshots::new(&dir, &sim);
     snaps.record(&mut sim);
     write_snapshot(&sim, &mut snaps)?;
@@ -142,25 +185,291 @@ fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<R
     if let Some(b) = bodies_csv.as_mut() {
         b.rows(&mut sim)?;
     }
+    let next_ckpt = sim.scene().output.checkpoint_every;
+    let run = Run {
+        sim,
+        dir,
+        series,
+        bodies_csv,
+        contacts_csv,
+        snaps,
+        next_out: every.map(|e| e.min(end)),
+        next_ckpt,
+        last_ckpt: None,
+    };
+    drive(run, opts, wall0)
+}
 
+/// Continue the run of `checkpoint` (a file in its run directory) to the scene's end time (or
+/// `opts.until`), appending to the run directory's outputs and its log. `scene`, if given
+/// (with its file for messages), must be the checkpoint's; so must the run directory's
+/// `scene.ron`. First the outputs are cut back to the checkpoint: the CSV time series to its
+/// rows, the snapshots written after it removed, `fields.pvd` and `fields.xmf` to the
+/// snapshots kept, `series.h5` to the checkpoint's steps.
+pub fn restart_run(
+    checkpoint: &Path,
+    scene: Option<(&Path, Scene)>,
+    opts: &RunOptions,
+) -> anyhow::Result<RunSummary> {
+    let wall0 = Instant::now();
+    let ck = Checkpoint::load(checkpoint)?;
+    let mut run_scene = ck.scene()?;
+    if let Some((file, given)) = &scene
+        && !checkpoint::same_run(given, &run_scene)
+    {
+        return Err(ck
+            .error(format!(
+                "the scene {} is not the one the checkpoint was written with (only the end \
+                 time and the checkpoint interval may change on a restart; see its scene in \
+                 the run directory's scene.ron)",
+                file.display()
+            ))
+            .into());
+    }
+    let dir = match checkpoint.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let scene_file = dir.join("scene.ron");
+    if let Ok(text) = std::fs::read_to_string(&scene_file) {
+        let same = Scene::parse(&text, &scene_file.display().to_string(), "")
+            .is_ok_and(|s| checkpoint::same_run(&s, &run_scene));
+        if !same {
+            return Err(ck
+                .error(format!(
+                    "{} describes another scene: the checkpoint does not belong to this run \
+                     directory",
+                    scene_file.display()
+                ))
+                .into());
+        }
+    }
+    apply_overrides(&mut run_scene, opts)?;
+    let (t0, step0) = (ck.time.t, ck.time.step);
+    let end = run_scene.numerics.end_time;
+    if opts.until.is_some() && end <= t0 {
+        return Err(ck
+            .error(format!(
+                "--until {end} is not after the checkpoint's time t = {t0}"
+            ))
+            .into());
+    }
+    let p = &ck.progress;
+    let csvs = [
+        ("series.csv", Some(p.series_len)),
+        ("bodies.csv", p.bodies_len),
+        ("contacts.csv", p.contacts_len),
+    ];
+    for (name, len) in csvs {
+        let Some(len) = len else { continue };
+        let have = std::fs::metadata(dir.join(name)).map(|m| m.len()).ok();
+        if have.is_none_or(|h| h < len) {
+            return Err(ck
+                .error(format!(
+                    "{} has {} bytes, fewer than the {len} it had at the checkpoint: the run \
+                     directory does not match the checkpoint",
+                    dir.join(name).display(),
+                    have.map_or("no".to_string(), |h| h.to_string())
+                ))
+                .into());
+        }
+    }
+    let sim = ck.simulation(run_scene)?;
+    // The snapshots kept, their indexes and series.h5, read back (nothing is changed yet).
+    let snaps = Snapshots::resume(&dir, &sim, p).map_err(|m| ck.error(m))?;
+    // Checked: from here on the run directory is changed, and the log goes on.
+    let _log = RunLog::append(&dir.join("log.txt"))?;
+    tracing::info!(
+        "tumble {} restart from {} at step {step0}, t = {t0}: end time {end}, {} threads",
+        env!("CARGO_PKG_VERSION"),
+        checkpoint.display(),
+        rayon::current_num_threads()
+    );
+    continue_run(sim, snaps, &ck, &dir, opts, wall0).inspect_err(log_error)
+}
+
+/// [`restart_run`] once the checkpoint and the run directory are checked and the log is open.
+fn continue_run(
+    sim: Simulation,
+    mut snaps: Snapshots,
+    ck: &Checkpoint,
+    dir: &Path,
+    opts: &RunOptions,
+    wall0: Instant,
+) -> anyhow::Result<RunSummary> {
+    let p = &ck.progress;
+    let csvs = [
+        ("series.csv", Some(p.series_len)),
+        ("bodies.csv", p.bodies_len),
+        ("contacts.csv", p.contacts_len),
+    ];
+    checkpoint::remove_temp_files(dir)
+        .with_context(|| format!("cannot clean up {}", dir.display()))?;
+    for (name, len) in csvs {
+        let Some(len) = len else { continue };
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(dir.join(name))
+            .and_then(|f| f.set_len(len))
+            .with_context(|| format!("cannot cut {name} back to the checkpoint"))?;
+    }
+    // Snapshots written after the checkpoint are written again (or not, with another end).
+    snaps.cut_back()?;
+    atomic_write(&dir.join("scene.ron"), sim.scene().to_ron().as_bytes())
+        .context("cannot write scene.ron")?;
+    let series = CsvWriter::append(&dir.join("series.csv"), 6).context("cannot open series.csv")?;
+    let append = |name: &str| -> anyhow::Result<std::io::BufWriter<std::fs::File>> {
+        let path = dir.join(name);
+        let f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&path)
+            .with_context(|| format!("cannot open {}", path.display()))?;
+        Ok(std::io::BufWriter::new(f))
+    };
+    let bodies_csv = match p.bodies_len {
+        Some(_) => Some(BodiesCsv(append("bodies.csv")?)),
+        None => None,
+    };
+    let contacts_csv = match p.contacts_len {
+        Some(_) => Some(ContactsCsv(append("contacts.csv")?)),
+        None => None,
+    };
+    let next_ckpt = sim
+        .scene()
+        .output
+        .checkpoint_every
+        .map(|c| next_multiple(ck.time.t, c));
+    let run = Run {
+        sim,
+        dir: dir.to_path_buf(),
+        series,
+        bodies_csv,
+        contacts_csv,
+        snaps,
+        next_out: p.next_out,
+        next_ckpt,
+        last_ckpt: Some((ck.time.t, ck.time.step)),
+    };
+    drive(run, opts, wall0)
+}
+
+/// The first multiple of `every` after `t`.
+fn next_multiple(t: f64, every: f64) -> f64 {
+    let mut k = (t / every).floor() + 1.0;
+    if k * every <= t * (1.0 + 1e-12) {
+        k += 1.0;
+    }
+    k * every
+}
+
+impl Run {
+    /// Write a checkpoint of the current state (after flushing and syncing the time series it
+    /// records the lengths of, and writing `series.h5`, which a restart reads back).
+    fn checkpoint(&mut self) -> anyhow::Result<()> {
+        self.series.flush().context("cannot write series.csv")?;
+        if let Some(b) = self.bodies_csv.as_mut() {
+            b.flush()?;
+        }
+        if let Some(c) = self.contacts_csv.as_mut() {
+            c.flush()?;
+        }
+        self.snaps.finish()?;
+        let synced_len = |name: &str| -> anyhow::Result<u64> {
+            let path = self.dir.join(name);
+            let f = std::fs::File::open(&path)
+                .with_context(|| format!("cannot open {}", path.display()))?;
+            f.sync_all()
+                .with_context(|| format!("cannot sync {}", path.display()))?;
+            Ok(f.metadata()?.len())
+        };
+        let progress = RunProgress {
+            next_out: self.next_out,
+            snapshots: self.snaps.count() as u64,
+            pvd: self.snaps.pvd_entries().to_vec(),
+            series_len: synced_len("series.csv")?,
+            bodies_len: match self.bodies_csv {
+                Some(_) => Some(synced_len("bodies.csv")?),
+                None => None,
+            },
+            contacts_len: match self.contacts_csv {
+                Some(_) => Some(synced_len("contacts.csv")?),
+                None => None,
+            },
+        };
+        let path = self.dir.join(checkpoint::FILE_NAME);
+        checkpoint::save(&path, &mut self.sim, &progress)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        let (t, step) = (self.sim.time(), self.sim.steps());
+        self.last_ckpt = Some((t, step));
+        tracing::info!("checkpoint at step {step}, t = {t}");
+        Ok(())
+    }
+
+    /// After a step whose outputs are written: checkpoint if one is due or a stop was asked
+    /// for, and stop if so.
+    fn after_step(&mut self, end: f64) -> anyhow::Result<()> {
+        let t = self.sim.time();
+        let due = self.next_ckpt.is_some_and(|c| t >= c * (1.0 - 1e-12));
+        let stop = checkpoint::interrupt_requested() && t < end * (1.0 - 1e-12);
+        if due || stop {
+            self.checkpoint()?;
+            if let Some(every) = self.sim.scene().output.checkpoint_every {
+                self.next_ckpt = Some(next_multiple(t, every));
+            }
+        }
+        if stop {
+            return Err(Interrupted {
+                step: self.sim.steps(),
+                t,
+                checkpoint: self.dir.join(checkpoint::FILE_NAME),
+            }
+            .into());
+        }
+        Ok(())
+    }
+
+    /// The message of a failed step, naming the last good checkpoint if there is one.
+    fn failed(&self, e: anyhow::Error) -> anyhow::Error {
+        match self.last_ckpt {
+            Some((t, step)) => {
+                let path = self.dir.join(checkpoint::FILE_NAME);
+                anyhow::anyhow!(
+                    "{e:#}; the last good checkpoint is {} (step {step}, t = {t})",
+                    path.display()
+                )
+            }
+            None => e,
+        }
+    }
+}
+
+/// The stepping loop of a run, then its closing outputs (`series.h5`, timings, plots, the
+/// log's last lines).
+fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunSummary> {
+    let end = run.sim.scene().numerics.end_time;
+    let every = run.sim.scene().output.every;
+    let steps0 = run.sim.steps();
     let bar = progress_bar(opts.quiet);
     let mut totals: Vec<(&'static str, f64)> = Vec::new();
-    let mut next_out = every.map(|e| e.min(end));
-    let mut last_tenth = 0u32;
+    let mut last_tenth = ((run.sim.time() / end).clamp(0.0, 1.0) * 10.0).floor() as u32;
     let result: anyhow::Result<()> = (|| {
-        while sim.time() < end * (1.0 - 1e-12) {
-            let stop = next_out.map_or(end, |o| o.min(end));
-            sim.set_stop_at(Some(stop));
-            while sim.time() < stop * (1.0 - 1e-12) {
-                sim.step()?;
-                write_row(&mut series, &sim.sample())?;
-                if let Some(b) = bodies_csv.as_mut() {
-                    b.rows(&mut sim)?;
+        let run = &mut run;
+        while run.sim.time() < end * (1.0 - 1e-12) {
+            let stop = run.next_out.map_or(end, |o| o.min(end));
+            run.sim.set_stop_at(Some(stop));
+            while run.sim.time() < stop * (1.0 - 1e-12) {
+                if let Err(e) = run.sim.step() {
+                    return Err(run.failed(e));
                 }
-                if let Some(c) = contacts_csv.as_mut() {
-                    c.rows(&sim)?;
+                let sim = &mut run.sim;
+                write_row(&mut run.series, &sim.sample())?;
+                if let Some(b) = run.bodies_csv.as_mut() {
+                    b.rows(sim)?;
                 }
-                snaps.record(&mut sim);
+                if let Some(c) = run.contacts_csv.as_mut() {
+                    c.rows(sim)?;
+                }
+                run.snaps.record(sim);
                 for &(name, s) in &sim.timings().last {
                     match totals.iter_mut().find(|e| e.0 == name) {
                         Some(e) => e.1 += s,
@@ -189,19 +498,41 @@ fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<R
                         wall0.elapsed().as_secs_f64()
                     );
                 }
-            }
-            if next_out.is_some_and(|o| sim.time() >= o * (1.0 - 1e-12))
-                || sim.time() >= end * (1.0 - 1e-12)
-            {
-                write_snapshot(&sim, &mut snaps)?;
-                if let Some(e) = every {
-                    next_out = next_out.map(|o| o + e);
+                // At the end of the interval the snapshot comes first, then the checkpoint.
+                if run.sim.time() < stop * (1.0 - 1e-12) {
+                    run.after_step(end)?;
                 }
             }
+            if run
+                .next_out
+                .is_some_and(|o| run.sim.time() >= o * (1.0 - 1e-12))
+                || run.sim.time() >= end * (1.0 - 1e-12)
+            {
+                write_snapshot(&run.sim, &mut run.snaps)?;
+                if let Some(e) = every {
+                    run.next_out = run.next_out.map(|o| o + e);
+                }
+            }
+            run.after_step(end)?;
+        }
+        // A final checkpoint, from which the run can be continued (`--restart --until`).
+        if run.sim.scene().output.checkpoint_every.is_some()
+            && run.last_ckpt.is_none_or(|(_, s)| s != run.sim.steps())
+        {
+            run.checkpoint()?;
         }
         Ok(())
     })();
     bar.finish_and_clear();
+    let Run {
+        sim,
+        dir,
+        mut series,
+        mut bodies_csv,
+        mut contacts_csv,
+        mut snaps,
+        ..
+    } = run;
     series.flush().context("cannot write series.csv")?;
     if let Some(b) = bodies_csv.as_mut() {
         b.flush()?;
@@ -214,6 +545,7 @@ fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<R
     let summary = RunSummary {
         dir: dir.clone(),
         steps: sim.steps(),
+        steps_run: sim.steps() - steps0,
         last: sim.sample(),
         system_seconds: totals,
         wall,
@@ -226,18 +558,19 @@ fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<R
             snaps.count(),
             wall
         ),
+        Err(e) if e.downcast_ref::<Interrupted>().is_some() => tracing::warn!("{e}"),
         Err(_) => tracing::error!(
             "stopped at step {}, t = {} (the error follows)",
             summary.steps,
             summary.last.t
         ),
     }
-    crate::runlog::timings_table(&summary.system_seconds, summary.steps, wall);
+    crate::runlog::timings_table(&summary.system_seconds, summary.steps_run, wall);
     let mut timing_lines = String::from("system,seconds_total,seconds_per_step\n");
     for (name, s) in &summary.system_seconds {
         timing_lines.push_str(&format!(
             "{name},{s:.6},{:.6}\n",
-            s / summary.steps.max(1) as f64
+            s / summary.steps_run.max(1) as f64
         ));
     }
     atomic_write(&dir.join("timings.csv"), timing_lines.as_bytes())
@@ -255,6 +588,11 @@ fn run_logged(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<R
     }
     result?;
     Ok(summary)
+}
+
+/// Whether `e` (from [`run_scene`] or [`restart_run`]) is a refused checkpoint or restart.
+pub fn is_refused_restart(e: &anyhow::Error) -> bool {
+    e.downcast_ref::<CheckpointError>().is_some()
 }
 
 fn progress_bar(quiet: bool) -> ProgressBar {

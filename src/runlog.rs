@@ -26,21 +26,16 @@ impl RunLog {
         Ok(Self::to_file(file))
     }
 
-    /// Open `path` for appending (a continued run) and make it the log of this thread until
-    /// the value is dropped.
+    /// Open `path` for appending (a restarted run, see [`crate::run::restart_run`]) and make
+    /// it the log of this thread until the value is dropped.
     pub fn append(path: &Path) -> anyhow::Result<Self> {
         let file = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(path)
+            .map_err(|e| crate::output::disk_full(path, e))
             .with_context(|| format!("cannot open {}", path.display()))?;
         Ok(Self::to_file(file))
-    }
-
-    /// Log one line at level INFO (what the former hand-written log's `line` did).
-    pub fn line(&mut self, s: &str) -> anyhow::Result<()> {
-        tracing::info!("{s}");
-        Ok(())
     }
 
     fn to_file(file: File) -> Self {

@@ -290,6 +290,20 @@ pub struct Numerics {
     /// Use the Boussinesq form of the baroclinic term, ∇ρ × g / ρ_F (eq. 18), instead of the
     /// full form (eq. 28). Default: false.
     pub boussinesq: bool,
+    /// The fluid acceleration Du/Dt on the bodies' interfaces in the baroclinic term (eq. 28):
+    /// `Rigid`, the acceleration of the body's rigid motion (no slip), or `Eulerian`, the grid
+    /// estimate ∂u/∂t + (u·∇)u from the last two velocity fields (the paper's). Default: Rigid.
+    pub interface_acceleration: InterfaceAcceleration,
+}
+
+/// How the baroclinic term estimates Du/Dt where the density varies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum InterfaceAcceleration {
+    /// The acceleration of the rigid motion of the body the node belongs to.
+    #[default]
+    Rigid,
+    /// ∂u/∂t + (u·∇)u on the grid, from the last two velocity fields.
+    Eulerian,
 }
 
 /// The kernel that interpolates velocity onto particles and remeshes them.
@@ -316,6 +330,7 @@ impl Default for Numerics {
             interface_cells: 1.0,
             penalization_offset: 0.0,
             boussinesq: false,
+            interface_acceleration: InterfaceAcceleration::Rigid,
         }
     }
 }
@@ -400,6 +415,11 @@ pub struct Output {
     /// `Hdf5` (`fields_NNNNNN.h5` + `fields.xmf`, and the body and contact series in
     /// `series.h5`; needs a build with `--features hdf5`). At least one. Default: `[Vtk]`.
     pub formats: Vec<OutputFormat>,
+    /// Simulated time between checkpoints (`checkpoint.bin` in the run directory, replaced
+    /// each time; `tumble run --restart` continues from it), time units; `tumble run
+    /// --checkpoint-every` overrides it. `None` writes a checkpoint only when the run is
+    /// interrupted (Ctrl-C, SIGTERM). Default: None.
+    pub checkpoint_every: Option<f64>,
 }
 
 /// A file format for field snapshots.
@@ -426,6 +446,7 @@ impl Default for Output {
             fields: vec![FieldName::Omega, FieldName::Velocity, FieldName::Density],
             dir: None,
             formats: vec![OutputFormat::Vtk],
+            checkpoint_every: None,
         }
     }
 }
@@ -1059,6 +1080,14 @@ impl Scene {
                  library, e.g. `apt-get install libhdf5-dev`, then `cargo build --release \
                  --features hdf5`); this build writes only Vtk"
                     .into(),
+            );
+        }
+        if let Some(e) = self.output.checkpoint_every
+            && !(e.is_finite() && e > 0.0)
+        {
+            return err(
+                &["output", "checkpoint_every"],
+                format!("must be positive, got {e}"),
             );
         }
         Ok(())

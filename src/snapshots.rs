@@ -1,8 +1,13 @@
 //! Field snapshots of a run in the scene's formats (`output.formats`): VTK (`fields_NNNNNN.vti`
 //! indexed by `fields.pvd`) and, in builds with the `hdf5` feature, HDF5 (`fields_NNNNNN.h5`
 //! indexed by `fields.xmf`, plus `series.h5`, the time series of the run, the bodies and the
-//! contacts, rewritten at every snapshot and at the end).
+//! contacts, rewritten at every snapshot, at every checkpoint and at the end).
+//!
+//! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
+//! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
+//! (the snapshots written after the checkpoint removed, the indexes and `series.h5` rewritten).
 
+use crate::checkpoint::RunProgress;
 use crate::engine::Simulation;
 use crate::output::{PvdSeries, VtkField, write_vti};
 use crate::scene::{FieldName, OutputFormat};
@@ -35,9 +40,82 @@ impl Snapshots {
         }
     }
 
+    /// The writers of a restarted run in `dir`, continuing after the snapshots its checkpoint
+    /// (`progress`) counts; `sim` is the restored simulation. The HDF5 side is read back from
+    /// the files kept: each snapshot's time for `fields.xmf`, and `series.h5` cut to the
+    /// checkpoint's steps (it is written at every checkpoint, so it holds them all). Nothing
+    /// is written (see [`cut_back`](Snapshots::cut_back)); an error says why the run directory
+    /// does not match the checkpoint.
+    pub fn resume(dir: &Path, sim: &Simulation, progress: &RunProgress) -> Result<Self, String> {
+        let out = &sim.scene().output;
+        let count = progress.snapshots as usize;
+        let pvd = if out.has_format(OutputFormat::Vtk) {
+            if progress.pvd.len() != count {
+                return Err(format!(
+                    "it lists {} VTK snapshots in fields.pvd and counts {count} snapshots",
+                    progress.pvd.len()
+                ));
+            }
+            Some(PvdSeries::with_entries(
+                dir.join("fields.pvd"),
+                progress.pvd.clone(),
+            ))
+        } else {
+            None
+        };
+        #[cfg(feature = "hdf5")]
+        let hdf5 = if out.has_format(OutputFormat::Hdf5) {
+            Some(Hdf5Outputs::resume(dir, sim, count)?)
+        } else {
+            None
+        };
+        Ok(Snapshots {
+            dir: dir.to_path_buf(),
+            pvd,
+            #[cfg(feature = "hdf5")]
+            hdf5,
+            count,
+        })
+    }
+
+    /// Make the run directory match a resumed [`Snapshots`]: remove the snapshot files
+    /// numbered from [`count`](Snapshots::count) on (written after the checkpoint), rewrite
+    /// `fields.pvd` and `fields.xmf` with the snapshots kept and `series.h5` with the steps
+    /// up to the checkpoint.
+    pub fn cut_back(&mut self) -> anyhow::Result<()> {
+        for k in self.count.. {
+            let mut found = false;
+            for ext in ["vti", "h5"] {
+                let f = self.dir.join(format!("fields_{k:06}.{ext}"));
+                if f.exists() {
+                    std::fs::remove_file(&f)
+                        .with_context(|| format!("cannot remove {}", f.display()))?;
+                    found = true;
+                }
+            }
+            if !found {
+                break;
+            }
+        }
+        if let Some(p) = &self.pvd {
+            p.write().context("cannot write fields.pvd")?;
+        }
+        #[cfg(feature = "hdf5")]
+        if let Some(h) = &self.hdf5 {
+            h.xmf.write().context("cannot write fields.xmf")?;
+            h.write_series(&self.dir)?;
+        }
+        Ok(())
+    }
+
     /// Snapshots written so far.
     pub fn count(&self) -> usize {
         self.count
+    }
+
+    /// `(time, file)` of the VTK snapshots listed in `fields.pvd` (none without VTK output).
+    pub fn pvd_entries(&self) -> &[(f64, String)] {
+        self.pvd.as_ref().map_or(&[], |p| p.entries())
     }
 
     /// The index file a viewer opens: `fields.pvd`, else `fields.xmf`.
@@ -61,38 +139,14 @@ impl Snapshots {
     /// Write a snapshot of the current state in every format, then the indexes; returns the
     /// files written.
     pub fn write(&mut self, sim: &Simulation) -> anyhow::Result<Vec<String>> {
-        let f = sim.fields();
-        let omega: Vec<&[f64]> = f.omega().iter().map(|c| c.as_slice()).collect();
-        let u: Vec<&[f64]> = f.u.iter().map(|c| c.as_slice()).collect();
-        let bf = sim.world.get_resource::<crate::bodies::BodyFields>();
-        // φ is -∞ far from every body: clamped, as readers choke on infinities.
-        let phi: Vec<f64> = bf
-            .map(|b| b.phi.iter().map(|p| p.max(-1e30)).collect())
-            .unwrap_or_default();
-        type Comps<'a> = Vec<&'a [f64]>;
-        let (rho, chi, phi): (Comps, Comps, Comps) = match bf {
-            Some(b) => (vec![&b.rho], vec![&b.chi], vec![&phi]),
-            None => Default::default(),
-        };
-        let mut vtk = Vec::new();
-        for name in &sim.scene().output.fields {
-            let mut add = |name, components| vtk.push(VtkField { name, components });
-            match name {
-                FieldName::Omega => add("omega", &omega),
-                FieldName::Velocity => add("velocity", &u),
-                FieldName::Density => {
-                    if bf.is_some() {
-                        add("density", &rho);
-                        add("chi", &chi);
-                        add("phi", &phi);
-                    }
-                }
-            }
-        }
+        with_fields(sim, |vtk| self.write_fields(sim, vtk))
+    }
+
+    fn write_fields(&mut self, sim: &Simulation, vtk: &[VtkField]) -> anyhow::Result<Vec<String>> {
         let mut written = Vec::new();
         if let Some(pvd) = self.pvd.as_mut() {
             let file = format!("fields_{:06}.vti", self.count);
-            write_vti(&self.dir.join(&file), sim.grid(), sim.time(), &vtk)
+            write_vti(&self.dir.join(&file), sim.grid(), sim.time(), vtk)
                 .with_context(|| format!("cannot write {file}"))?;
             pvd.push(sim.time(), &file)
                 .context("cannot write fields.pvd")?;
@@ -100,13 +154,13 @@ impl Snapshots {
         }
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.hdf5.as_mut() {
-            written.extend(h.snapshot(&self.dir, self.count, sim, &vtk)?);
+            written.extend(h.snapshot(&self.dir, self.count, sim, vtk)?);
         }
         self.count += 1;
         Ok(written)
     }
 
-    /// Write what is kept in memory until the end (`series.h5`).
+    /// Write what is kept in memory (`series.h5`): at a checkpoint and at the end.
     pub fn finish(&mut self) -> anyhow::Result<()> {
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.hdf5.as_ref() {
@@ -114,6 +168,40 @@ impl Snapshots {
         }
         Ok(())
     }
+}
+
+/// Call `f` with the fields of a snapshot of `sim`, in the scene's `output.fields` order:
+/// `omega`, `velocity`, and with bodies `density`, `chi`, `phi` (φ is -∞ far from every body:
+/// clamped at -1e30, as readers choke on infinities).
+fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
+    let fl = sim.fields();
+    let omega: Vec<&[f64]> = fl.omega().iter().map(|c| c.as_slice()).collect();
+    let u: Vec<&[f64]> = fl.u.iter().map(|c| c.as_slice()).collect();
+    let bf = sim.world.get_resource::<crate::bodies::BodyFields>();
+    let phi: Vec<f64> = bf
+        .map(|b| b.phi.iter().map(|p| p.max(-1e30)).collect())
+        .unwrap_or_default();
+    type Comps<'a> = Vec<&'a [f64]>;
+    let (rho, chi, phi): (Comps, Comps, Comps) = match bf {
+        Some(b) => (vec![&b.rho], vec![&b.chi], vec![&phi]),
+        None => Default::default(),
+    };
+    let mut vtk = Vec::new();
+    for name in &sim.scene().output.fields {
+        let mut add = |name, components| vtk.push(VtkField { name, components });
+        match name {
+            FieldName::Omega => add("omega", &omega),
+            FieldName::Velocity => add("velocity", &u),
+            FieldName::Density => {
+                if bf.is_some() {
+                    add("density", &rho);
+                    add("chi", &chi);
+                    add("phi", &phi);
+                }
+            }
+        }
+    }
+    f(&vtk)
 }
 
 #[cfg(feature = "hdf5")]
@@ -160,6 +248,45 @@ impl Hdf5Outputs {
             },
             steps_recorded: u64::MAX,
         }
+    }
+
+    /// The outputs of a restarted run after `count` snapshots (see [`Snapshots::resume`]).
+    fn resume(dir: &Path, sim: &Simulation, count: usize) -> Result<Self, String> {
+        use crate::xdmf::XdmfEntry;
+        let mut h = Hdf5Outputs::new(dir, sim);
+        let (t0, step0) = (sim.time(), sim.steps());
+        // A snapshot's fields depend on the scene only: the same for every snapshot.
+        let attributes = with_fields(sim, xdmf_attributes);
+        let mut entries = Vec::with_capacity(count);
+        for k in 0..count {
+            let file = format!("fields_{k:06}.h5");
+            let time = crate::hdf5_out::read_time(&dir.join(&file))
+                .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?;
+            if time > t0 {
+                return Err(format!(
+                    "{} is a snapshot at t = {time}, after the checkpoint: the run directory \
+                     does not match the checkpoint",
+                    dir.join(&file).display()
+                ));
+            }
+            entries.push(XdmfEntry {
+                time,
+                file,
+                attributes: attributes.clone(),
+            });
+        }
+        h.xmf = crate::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries);
+        let path = dir.join("series.h5");
+        crate::hdf5_out::read_series(&path, &mut h.series)
+            .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?;
+        cut_series(&mut h.series, step0 as usize + 1, t0).map_err(|e| {
+            format!(
+                "{} {e}: the run directory does not match the checkpoint",
+                path.display()
+            )
+        })?;
+        h.steps_recorded = step0;
+        Ok(h)
     }
 
     fn record(&mut self, sim: &mut Simulation) {
@@ -218,7 +345,7 @@ impl Hdf5Outputs {
         sim: &Simulation,
         fields: &[VtkField],
     ) -> anyhow::Result<Vec<String>> {
-        use crate::xdmf::{XdmfAttribute, XdmfEntry};
+        use crate::xdmf::XdmfEntry;
         let file = format!("fields_{k:06}.h5");
         crate::hdf5_out::write_fields(
             &dir.join(&file),
@@ -232,13 +359,7 @@ impl Hdf5Outputs {
             .push(XdmfEntry {
                 time: sim.time(),
                 file: file.clone(),
-                attributes: fields
-                    .iter()
-                    .map(|f| XdmfAttribute {
-                        name: f.name.to_string(),
-                        components: if f.components.len() == 1 { 1 } else { 3 },
-                    })
-                    .collect(),
+                attributes: xdmf_attributes(fields),
             })
             .context("cannot write fields.xmf")?;
         self.write_series(dir)?;
@@ -249,4 +370,78 @@ impl Hdf5Outputs {
         crate::hdf5_out::write_series(&dir.join("series.h5"), &self.series)
             .context("cannot write series.h5")
     }
+}
+
+/// The XDMF attributes of a snapshot's fields.
+#[cfg(feature = "hdf5")]
+fn xdmf_attributes(fields: &[VtkField]) -> Vec<crate::xdmf::XdmfAttribute> {
+    fields
+        .iter()
+        .map(|f| crate::xdmf::XdmfAttribute {
+            name: f.name.to_string(),
+            components: if f.components.len() == 1 { 1 } else { 3 },
+        })
+        .collect()
+}
+
+/// Cut `series` (read back from `series.h5`) to the first `steps` recorded steps (the initial
+/// state and every step up to a checkpoint at time `t`) and the contacts up to `t`. An error
+/// says what is missing.
+#[cfg(feature = "hdf5")]
+fn cut_series(series: &mut crate::hdf5_out::Series, steps: usize, t: f64) -> Result<(), String> {
+    let cut = |v: &mut Vec<f64>, per: usize, what: &str| -> Result<(), String> {
+        if v.len() < per * steps {
+            return Err(format!(
+                "has {} values of {what}, fewer than the {} of the {steps} steps up to the \
+                 checkpoint",
+                v.len(),
+                per * steps
+            ));
+        }
+        v.truncate(per * steps);
+        Ok(())
+    };
+    for (name, v) in &mut series.global {
+        cut(v, 1, &format!("/series/{name}"))?;
+    }
+    for b in &mut series.bodies {
+        let g = format!("/bodies/{}", b.name);
+        cut(&mut b.t, 1, &format!("{g}/t"))?;
+        if b.t.last() != Some(&t) {
+            return Err(format!(
+                "has no entry of {g} at the checkpoint's time t = {t}"
+            ));
+        }
+        for (k, v, per) in [
+            ("center", &mut b.center, 3),
+            ("velocity", &mut b.velocity, 3),
+            ("angular_velocity", &mut b.angular_velocity, 3),
+            ("orientation", &mut b.orientation, 4),
+            ("force", &mut b.force, 3),
+            ("torque", &mut b.torque, 3),
+        ] {
+            cut(v, per, &format!("{g}/{k}"))?;
+        }
+    }
+    if let Some(c) = series.contacts.as_mut() {
+        let m = c.t.partition_point(|&x| x <= t);
+        let lens = [
+            c.body_a.len(),
+            c.body_b.len(),
+            c.gap.len(),
+            c.normal_force.len(),
+        ];
+        if lens.iter().any(|&n| n < m) {
+            return Err(format!(
+                "has contact records of unequal lengths ({} times, {lens:?})",
+                c.t.len()
+            ));
+        }
+        c.t.truncate(m);
+        c.body_a.truncate(m);
+        c.body_b.truncate(m);
+        c.gap.truncate(m);
+        c.normal_force.truncate(m);
+    }
+    Ok(())
 }

@@ -70,6 +70,16 @@ impl XdmfSeries {
         }
     }
 
+    /// A series on `grid` indexed in `path` that already lists `entries` (a restarted run's;
+    /// nothing is written until [`write`](XdmfSeries::write) or the next push).
+    pub fn with_entries(path: impl Into<PathBuf>, grid: &Grid, entries: Vec<XdmfEntry>) -> Self {
+        XdmfSeries {
+            path: path.into(),
+            grid: grid.clone(),
+            entries,
+        }
+    }
+
     /// The index file.
     pub fn path(&self) -> &Path {
         &self.path
@@ -84,11 +94,16 @@ impl XdmfSeries {
     /// the entry is not kept.
     pub fn push(&mut self, entry: XdmfEntry) -> io::Result<()> {
         self.entries.push(entry);
-        let r = atomic_write(&self.path, self.text().as_bytes());
+        let r = self.write();
         if r.is_err() {
             self.entries.pop();
         }
         r
+    }
+
+    /// Rewrite the index atomically with the listed snapshots.
+    pub fn write(&self) -> io::Result<()> {
+        atomic_write(&self.path, self.text().as_bytes())
     }
 
     /// The XML text of the index.

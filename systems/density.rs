@@ -2,9 +2,10 @@
 //!
 //! ρ = ρ_F (1 - Σ_i χ_i) + Σ_i ρ_i χ_i, with χ_i = H(φ_i) from the level-set system. Static
 //! bodies (walls) count with the fluid's density, so that gravity makes no vorticity at walls.
-//! Also keeps Σχ_i and the union level set max_i φ_i for output.
+//! Also keeps Σχ_i and the union level set max_i φ_i for output, and at each node the body
+//! whose level set is the largest there (its owner, for the baroclinic term).
 
-use crate::bodies::{Body, BodyFields, GridPatch, Material};
+use crate::bodies::{Body, BodyFields, GridPatch, Material, NO_BODY};
 use crate::fields::{Params, SystemTimer, Timings};
 use crate::grid::Grid;
 use bevy_ecs::prelude::*;
@@ -24,6 +25,7 @@ pub fn density(
     out.rho.par_iter_mut().for_each(|r| *r = rho_f);
     out.chi.par_iter_mut().for_each(|c| *c = 0.0);
     out.phi.par_iter_mut().for_each(|p| *p = f64::NEG_INFINITY);
+    out.owner.par_iter_mut().for_each(|o| *o = NO_BODY);
     // Bodies in spawn order, so overlapping patches add up in a fixed order.
     for (body, mat, patch) in &bodies {
         let drho = if body.is_static() {
@@ -36,11 +38,13 @@ pub fn density(
             continue;
         }
         let rows = patch.len() / dx;
-        let (rho, chi, phi) = (
+        let (rho, chi, phi, owner) = (
             crate::grid::SyncPtr(out.rho.as_mut_ptr()),
             crate::grid::SyncPtr(out.chi.as_mut_ptr()),
             crate::grid::SyncPtr(out.phi.as_mut_ptr()),
+            crate::grid::SyncPtr(out.owner.as_mut_ptr()),
         );
+        let id = body.id as u32;
         (0..rows).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
             for a in 0..dx {
@@ -50,7 +54,10 @@ pub fn density(
                 unsafe {
                     rho.write(g, rho.read(g) + drho * patch.chi[l]);
                     chi.write(g, chi.read(g) + patch.chi[l]);
-                    phi.write(g, phi.read(g).max(patch.phi[l]));
+                    if patch.phi[l] > phi.read(g) {
+                        phi.write(g, patch.phi[l]);
+                        owner.write(g, id);
+                    }
                 }
             }
         });

@@ -5,9 +5,10 @@
 //! quaternion matrix R^n), q ← rot(Ω Δt) q, and the body frame's origin c turns with it about
 //! x_G: c ← x_G + rot(Ω Δt)(c - x_G). A kinematic body's prescription is the motion of its
 //! origin c, which it follows exactly. Dynamic bodies use the ū computed from the flow this step,
-//! kinematic bodies their prescribed motion, static bodies stay.
+//! kinematic bodies their prescribed motion, static bodies stay. The velocities used are kept
+//! as the next step's previous velocity ([`PreviousVelocity`]).
 
-use crate::bodies::{Body, RigidState, kinematic_velocity};
+use crate::bodies::{Body, PreviousVelocity, RigidState, kinematic_velocity};
 use crate::fields::{SimTime, SystemTimer, Timings};
 use bevy_ecs::prelude::*;
 use glam::DQuat;
@@ -15,15 +16,20 @@ use glam::DQuat;
 /// The rigid-update system.
 pub fn rigid_update(
     time: Res<SimTime>,
-    mut bodies: Query<(&Body, &mut RigidState)>,
+    mut bodies: Query<(&Body, &mut RigidState, &mut PreviousVelocity)>,
     mut timings: ResMut<Timings>,
 ) {
     let timer = SystemTimer::start();
     let dt = time.dt;
-    for (body, mut s) in &mut bodies {
+    for (body, mut s, mut prev) in &mut bodies {
         if body.is_static() {
             continue;
         }
+        // This step's ū, for the next step's acceleration (baroclinic term).
+        *prev = PreviousVelocity {
+            velocity: s.velocity,
+            angular_velocity: s.angular_velocity,
+        };
         if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {
             // A prescribed motion is that of the body frame's origin.
             s.velocity = v;

@@ -84,6 +84,17 @@ impl TransportScratch {
             reverse: false,
         }
     }
+
+    /// Whether the next step sweeps the axes in reverse order (the split order alternates
+    /// every step; a checkpoint keeps it).
+    pub fn reverse(&self) -> bool {
+        self.reverse
+    }
+
+    /// Set the order of the next step's sweeps (restoring a checkpoint).
+    pub fn set_reverse(&mut self, reverse: bool) {
+        self.reverse = reverse;
+    }
 }
 
 /// The transport system.

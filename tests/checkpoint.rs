@@ -1,0 +1,607 @@
+//! Checkpoint and restart: a run stopped and restarted gives results identical bit for bit to
+//! the run that never stopped (in memory and through the command line, also after SIGKILL and
+//! SIGINT), and bad checkpoints are refused with exit status 2.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+use tumble::checkpoint::{self, BodyState, Checkpoint, RunProgress};
+use tumble::engine::Simulation;
+use tumble::scene::Scene;
+
+/// 2D: a heavy disk thrown at the floor of a static cavity (contact from the first step), a
+/// kinematic paddle oscillating and turning, a vortex, adaptive time step.
+const BOX_2D: &str = r#"Scene(
+    name: "box2d",
+    domain: (origin: [-0.0625, -0.0625], extent: [1.125, 1.125], h: 0.015625),
+    fluid: (density: 1.0, viscosity: 0.01, gravity: [0.0, -10.0]),
+    numerics: (dt: Adaptive(c: 0.5, dt_max: 0.004), end_time: 0.3),
+    contact: (kappa: 30.0),
+    initial: [LambOseen(center: [0.3, 0.6], circulation: 0.2, core_radius: 0.08)],
+    bodies: [
+        (name: "cavity", shape: Complement(Rectangle(half_extents: [0.5, 0.5])), kind: Static,
+         position: [0.5, 0.5]),
+        (name: "disk", shape: Disk(radius: 0.1), density: 1.5, position: [0.45, 0.125],
+         velocity: [0.1, -0.5]),
+        (name: "paddle", shape: Rectangle(half_extents: [0.08, 0.03]),
+         kind: Kinematic(velocity: [0.0, 0.0], angular_velocity: [1.0], amplitude: [0.2, 0.0],
+                         frequency: 2.0),
+         position: [0.7, 0.7]),
+    ],
+    output: (every: 0.1),
+)"#;
+
+/// 3D, 32³: a heavy sphere thrown at the floor of a static box, a kinematic sphere turning, a
+/// vortex ring.
+const BOX_3D: &str = r#"Scene(
+    name: "box3d",
+    domain: (extent: [1.0, 1.0, 1.0], h: 0.03125),
+    fluid: (density: 1.0, viscosity: 0.01, gravity: [0.0, 0.0, -10.0]),
+    numerics: (dt: Adaptive(c: 0.5, dt_max: 0.004), end_time: 1.0),
+    contact: (kappa: 30.0),
+    initial: [VortexRing(center: [0.5, 0.5, 0.6], axis: [0.1, 0.0, 1.0], radius: 0.2,
+                         core_radius: 0.06, circulation: 0.5)],
+    bodies: [
+        (name: "box", shape: Complement(Box(half_extents: [0.4, 0.4, 0.4])), kind: Static,
+         position: [0.5, 0.5, 0.5]),
+        (name: "ball", shape: Sphere(radius: 0.12), density: 2.0, position: [0.45, 0.5, 0.25],
+         velocity: [0.1, 0.0, -0.5], angular_velocity: [0.0, 1.0, 0.0]),
+        (name: "spinner", shape: Ellipsoid(radii: [0.1, 0.06, 0.05]),
+         kind: Kinematic(velocity: [0.0, 0.0, 0.0], angular_velocity: [0.0, 0.0, 2.0]),
+         position: [0.5, 0.5, 0.72]),
+    ],
+)"#;
+
+/// Vacuum, 3D: a spinning ellipsoid drops on a floor next to a sphere (contact, angular
+/// momentum carried by the free motion).
+const VACUUM_3D: &str = r#"Scene(
+    name: "vacuum3d",
+    domain: (extent: [1.0, 1.0, 1.0], h: 0.03125),
+    fluid: (gravity: [0.0, 0.0, -1.0]),
+    vacuum: true,
+    contact: (kappa: 5.0),
+    numerics: (dt: Fixed(0.003125), end_time: 1.0),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 0.0, 1.0], offset: 0.0), kind: Static,
+         position: [0.5, 0.5, 0.1]),
+        (name: "ellipsoid", shape: Ellipsoid(radii: [0.2, 0.1, 0.08]), density: 1.0,
+         position: [0.5, 0.5, 0.23], rotation: [0.0, 0.3, 0.0],
+         velocity: [0.0, 0.0, -0.4], angular_velocity: [1.0, 2.0, 3.0]),
+        (name: "ball", shape: Sphere(radius: 0.1), density: 2.0, position: [0.5, 0.78, 0.22],
+         velocity: [0.0, -0.3, 0.0]),
+    ],
+)"#;
+
+fn sim(text: &str) -> Simulation {
+    Simulation::new(Scene::parse(text, "test", "test").unwrap()).unwrap()
+}
+
+fn bits(f: &[Vec<f64>]) -> Vec<Vec<u64>> {
+    f.iter()
+        .map(|c| c.iter().map(|x| x.to_bits()).collect())
+        .collect()
+}
+
+/// Every number of a body's state, as bits.
+fn body_bits(b: &BodyState) -> (usize, String, Vec<u64>) {
+    let r = &b.rigid;
+    let mut v: Vec<f64> = Vec::new();
+    for x in [r.center, r.velocity, r.angular_velocity, r.centroid] {
+        v.extend(x.to_array());
+    }
+    v.extend(r.orientation.to_array());
+    v.push(r.volume);
+    v.extend(r.inertia.to_cols_array());
+    v.extend(b.hydro.force.to_array());
+    v.extend(b.hydro.torque.to_array());
+    v.push(b.contact.kappa);
+    v.extend(b.contact.force.to_array());
+    v.extend(b.contact.torque.to_array());
+    v.push(b.contact.potential);
+    match b.free.angular_momentum {
+        Some(l) => v.extend(l.to_array()),
+        None => v.push(f64::NAN),
+    }
+    (
+        b.id,
+        b.name.clone(),
+        v.iter().map(|x| x.to_bits()).collect(),
+    )
+}
+
+/// The state of `sim` as bits: ω, u, u_prev, the clock, the sample, every body.
+#[allow(clippy::type_complexity)]
+fn state(
+    sim: &mut Simulation,
+) -> (
+    Vec<Vec<u64>>,
+    Vec<Vec<u64>>,
+    Vec<Vec<u64>>,
+    Vec<u64>,
+    Vec<(usize, String, Vec<u64>)>,
+) {
+    let f = sim.fields();
+    let (w, u, up) = (bits(f.omega()), bits(&f.u), bits(&f.u_prev));
+    let s = sim.sample();
+    let clock = [
+        sim.time(),
+        sim.world.resource::<tumble::fields::SimTime>().dt,
+        f.dt_prev,
+        s.energy,
+        s.enstrophy,
+        s.max_omega,
+        s.max_u,
+    ]
+    .iter()
+    .map(|x| x.to_bits())
+    .chain([sim.steps()])
+    .collect();
+    let bodies = checkpoint::body_states(sim).iter().map(body_bits).collect();
+    (w, u, up, clock, bodies)
+}
+
+/// Run `n` steps straight; run `m` steps, checkpoint to bytes, restore into a fresh simulation
+/// and run `n - m` more: the two end states must be the same bits.
+fn restart_is_bit_for_bit(text: &str, n: usize, m: usize) {
+    let mut straight = sim(text);
+    for _ in 0..n {
+        straight.step().unwrap();
+    }
+    let mut first = sim(text);
+    for _ in 0..m {
+        first.step().unwrap();
+    }
+    let bytes = checkpoint::to_bytes(&mut first, &RunProgress::default());
+    let ck = Checkpoint::from_bytes(&bytes, Path::new("memory")).unwrap();
+    assert_eq!(ck.time.step, m as u64);
+    let mut second = ck.simulation(ck.scene().unwrap()).unwrap();
+    assert!(
+        state(&mut second) == state(&mut first),
+        "the restored state differs from the checkpointed one"
+    );
+    // The checkpoint of the restored simulation is the same file (the scene round-trips too).
+    assert!(checkpoint::to_bytes(&mut second, &RunProgress::default()) == bytes);
+    drop(first);
+    for _ in m..n {
+        second.step().unwrap();
+    }
+    let (a, b) = (state(&mut straight), state(&mut second));
+    assert!(a.0 == b.0, "vorticity differs after the restart");
+    assert!(a.1 == b.1, "velocity differs after the restart");
+    assert!(a.2 == b.2, "previous velocity differs after the restart");
+    assert!(a.3 == b.3, "clock or diagnostics differ after the restart");
+    assert_eq!(a.4.len(), b.4.len());
+    for (x, y) in a.4.iter().zip(&b.4) {
+        assert!(x == y, "body `{}` differs after the restart", x.1);
+    }
+    assert!(
+        checkpoint::to_bytes(&mut straight, &RunProgress::default())
+            == checkpoint::to_bytes(&mut second, &RunProgress::default())
+    );
+}
+
+#[test]
+fn restart_2d_bodies_contact_is_bit_for_bit() {
+    // The disk is in contact with the floor, so the restart lands mid-contact.
+    let mut s = sim(BOX_2D);
+    for _ in 0..5 {
+        s.step().unwrap();
+    }
+    let c = s
+        .world
+        .resource::<tumble::systems::collision::Contacts>()
+        .records
+        .clone();
+    assert!(
+        c.iter().any(|r| r.force > 0.0),
+        "the test scene should have contact"
+    );
+    restart_is_bit_for_bit(BOX_2D, 40, 17);
+}
+
+#[test]
+fn restart_3d_bodies_is_bit_for_bit() {
+    restart_is_bit_for_bit(BOX_3D, 12, 5);
+}
+
+#[test]
+fn restart_vacuum_is_bit_for_bit() {
+    let mut s = sim(VACUUM_3D);
+    for _ in 0..30 {
+        s.step().unwrap();
+    }
+    let b = checkpoint::body_states(&mut s);
+    assert!(b.iter().any(|b| b.free.angular_momentum.is_some()));
+    assert!(b.iter().any(|b| b.contact.force.length() > 0.0));
+    restart_is_bit_for_bit(VACUUM_3D, 60, 23);
+}
+
+// ---- Command line ----
+
+fn tumble() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tumble"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tumble-ckpt-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    tumble().args(args).output().unwrap()
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "{:?}\n{}",
+        o.status,
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The outputs that must match bit for bit: the time series, the `.pvd` and every snapshot.
+fn assert_same_outputs(a: &Path, b: &Path) {
+    let mut names: Vec<String> = std::fs::read_dir(a)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| (n.ends_with(".csv") && n != "timings.csv") || n.ends_with(".vti"))
+        .collect();
+    names.push("fields.pvd".into());
+    names.sort();
+    assert!(names.iter().any(|n| n == "bodies.csv"));
+    for n in &names {
+        let (x, y) = (std::fs::read(a.join(n)).unwrap(), std::fs::read(b.join(n)));
+        assert!(
+            y.as_ref().is_ok_and(|y| *y == x),
+            "{n} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+    let count = |d: &Path| std::fs::read_dir(d).unwrap().count();
+    let vti = |d: &Path| {
+        std::fs::read_dir(d)
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_str()
+                    .unwrap()
+                    .ends_with(".vti")
+            })
+            .count()
+    };
+    assert_eq!(vti(a), vti(b), "{} vs {}", count(a), count(b));
+}
+
+/// The long 2D run (to t = 3) that the kill and interrupt tests stop and restart, run once
+/// without stopping.
+const LONG_END: &str = "3.0";
+
+fn scene_file(dir: &Path) -> PathBuf {
+    let f = dir.join("box2d.ron");
+    std::fs::write(&f, BOX_2D).unwrap();
+    f
+}
+
+fn reference_long() -> &'static Path {
+    static REF: OnceLock<PathBuf> = OnceLock::new();
+    REF.get_or_init(|| {
+        let d = tmp("reference");
+        let out = d.join("run");
+        ok(&run(&[
+            "run",
+            s(&scene_file(&d)),
+            "--out",
+            s(&out),
+            "--until",
+            LONG_END,
+            "--quiet",
+        ]));
+        out
+    })
+}
+
+/// Wait until the run in `dir` has a checkpoint at t ≥ `t` (the child must still be running).
+fn wait_for_checkpoint(child: &mut std::process::Child, dir: &Path, t: f64) -> Checkpoint {
+    let start = Instant::now();
+    loop {
+        if let Ok(ck) = Checkpoint::load(&dir.join(checkpoint::FILE_NAME))
+            && ck.time.t >= t
+        {
+            return ck;
+        }
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it was stopped"
+        );
+        assert!(start.elapsed() < Duration::from_secs(60), "no checkpoint");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn cli_restart_continues_the_run_bit_for_bit() {
+    let d = tmp("cli");
+    let scene = scene_file(&d);
+    let straight = d.join("straight");
+    ok(&run(&["run", s(&scene), "--out", s(&straight), "--quiet"]));
+    // Stop at t = 0.2 (an output time, so the clock lands there in both runs), then restart
+    // to the scene's end.
+    let stopped = d.join("stopped");
+    ok(&run(&[
+        "run",
+        s(&scene),
+        "--out",
+        s(&stopped),
+        "--until",
+        "0.2",
+        "--checkpoint-every",
+        "0.07",
+        "--quiet",
+    ]));
+    let ck = stopped.join(checkpoint::FILE_NAME);
+    let c = Checkpoint::load(&ck).unwrap();
+    assert_eq!(c.time.t, 0.2);
+    assert_eq!(c.progress.pvd.len(), 3);
+    let o = run(&["run", "--restart", s(&ck), "--until", "0.3", "--quiet"]);
+    ok(&o);
+    assert_same_outputs(&straight, &stopped);
+    let log = std::fs::read_to_string(stopped.join("log.txt")).unwrap();
+    assert!(log.contains("restart from"), "{log}");
+    assert!(log.contains("finished: 75 steps"), "{log}");
+    // The scene file may be given again; it must be the checkpoint's.
+    let o = run(&["run", s(&scene), "--restart", s(&ck), "--until", "0.35"]);
+    ok(&o);
+}
+
+#[test]
+fn killed_run_leaves_whole_files_and_restarts() {
+    let d = tmp("killed");
+    let out = d.join("run");
+    let mut child = tumble()
+        .args([
+            "run",
+            s(&scene_file(&d)),
+            "--out",
+            s(&out),
+            "--until",
+            LONG_END,
+            "--checkpoint-every",
+            "0.01",
+            "--quiet",
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for_checkpoint(&mut child, &out, 0.3);
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    // Every file that is not a temporary is whole.
+    let ck = Checkpoint::load(&out.join(checkpoint::FILE_NAME)).unwrap();
+    assert!(ck.time.t >= 0.3 && ck.time.t < 3.0);
+    let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
+    assert!(pvd.trim_end().ends_with("</VTKFile>"), "{pvd}");
+    let listed = pvd.matches("<DataSet").count();
+    assert!(listed >= ck.progress.pvd.len());
+    for e in std::fs::read_dir(&out).unwrap() {
+        let name = e.unwrap().file_name().into_string().unwrap();
+        if checkpoint::is_temp_file(&name) {
+            continue;
+        }
+        if name.ends_with(".vti") {
+            let v = tumble::output::read_vti(&out.join(&name))
+                .unwrap_or_else(|e| panic!("{name} is torn: {e}"));
+            assert!(v.time.is_some());
+        }
+        if name == "scene.ron" {
+            Scene::load(&out.join(&name)).unwrap();
+        }
+    }
+    let o = run(&[
+        "run",
+        "--restart",
+        s(&out.join(checkpoint::FILE_NAME)),
+        "--quiet",
+    ]);
+    ok(&o);
+    for e in std::fs::read_dir(&out).unwrap() {
+        let name = e.unwrap().file_name().into_string().unwrap();
+        assert!(!checkpoint::is_temp_file(&name), "{name} left behind");
+    }
+    assert_same_outputs(reference_long(), &out);
+}
+
+#[test]
+fn sigint_stops_with_a_checkpoint_and_restarts() {
+    let d = tmp("sigint");
+    let out = d.join("run");
+    let mut child = tumble()
+        .args([
+            "run",
+            s(&scene_file(&d)),
+            "--out",
+            s(&out),
+            "--until",
+            LONG_END,
+            "--checkpoint-every",
+            "0.5",
+            "--quiet",
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The first checkpoint shows the run is in its loop (the handler is installed).
+    wait_for_checkpoint(&mut child, &out, 0.5);
+    let k = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{:?}", o.status);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("restart with tumble run --restart"),
+        "{stderr}"
+    );
+    let ck = Checkpoint::load(&out.join(checkpoint::FILE_NAME)).unwrap();
+    assert!(ck.time.t < 3.0, "the run was not stopped early");
+    let log = std::fs::read_to_string(out.join("log.txt")).unwrap();
+    let line = format!("interrupted at step {}, t = {}", ck.time.step, ck.time.t);
+    assert!(log.contains(&line), "{log}");
+    // Rows up to the checkpoint only (flushed).
+    let rows = std::fs::read_to_string(out.join("series.csv")).unwrap();
+    assert_eq!(rows.lines().count() as u64, ck.time.step + 2);
+    let o = run(&[
+        "run",
+        "--restart",
+        s(&out.join(checkpoint::FILE_NAME)),
+        "--quiet",
+    ]);
+    ok(&o);
+    assert_same_outputs(reference_long(), &out);
+}
+
+#[test]
+fn bad_checkpoints_are_refused() {
+    let d = tmp("bad");
+    let scene = scene_file(&d);
+    let out = d.join("run");
+    ok(&run(&[
+        "run",
+        s(&scene),
+        "--out",
+        s(&out),
+        "--until",
+        "0.1",
+        "--checkpoint-every",
+        "0.05",
+        "--quiet",
+    ]));
+    let good_path = out.join(checkpoint::FILE_NAME);
+    let good = std::fs::read(&good_path).unwrap();
+    let series_len = std::fs::metadata(out.join("series.csv")).unwrap().len();
+    let refused = |file: &Path, extra: &[&str], what: &str| {
+        let mut args = vec!["run", "--restart", s(file), "--until", "0.2"];
+        args.extend_from_slice(extra);
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{what}: {:?} {err}", o.status);
+        assert!(!err.contains("panicked"), "{what}: {err}");
+        assert!(
+            err.contains(&format!("cannot restart from {}", file.display())),
+            "{what}: {err}"
+        );
+        // Nothing in the run directory was changed.
+        assert_eq!(
+            std::fs::metadata(out.join("series.csv")).unwrap().len(),
+            series_len
+        );
+        err.into_owned()
+    };
+    let write = |name: &str, bytes: &[u8]| {
+        let p = out.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    };
+    let e = refused(
+        &write("trunc.bin", &good[..good.len() / 2]),
+        &[],
+        "truncated",
+    );
+    assert!(e.contains("truncated"), "{e}");
+    let mut flipped = good.clone();
+    let mid = flipped.len() / 2;
+    flipped[mid] ^= 0x5a;
+    let e = refused(&write("flip.bin", &flipped), &[], "flipped byte");
+    assert!(e.contains("checksum"), "{e}");
+    // The tumble version string follows magic (8), format (4) and its length (8).
+    let mut version = good.clone();
+    let vlen = u64::from_le_bytes(version[12..20].try_into().unwrap()) as usize;
+    assert_eq!(
+        &version[20..20 + vlen],
+        tumble::checkpoint::CRATE_VERSION.as_bytes()
+    );
+    version[20] = b'7';
+    let e = refused(&write("version.bin", &version), &[], "other version");
+    assert!(e.contains("written by tumble 7"), "{e}");
+    let mut format = good.clone();
+    format[8] = 99;
+    let e = refused(&write("format.bin", &format), &[], "other format");
+    assert!(e.contains("format 99"), "{e}");
+    let e = refused(&write("text.bin", b"not a checkpoint\n"), &[], "not one");
+    assert!(e.contains("not a tumble checkpoint"), "{e}");
+    // Another scene, given on the command line or in the run directory.
+    let other = d.join("other.ron");
+    std::fs::write(&other, BOX_2D.replace("viscosity: 0.01", "viscosity: 0.02")).unwrap();
+    let e = refused(&good_path, &[s(&other)], "other scene");
+    assert!(e.contains("other.ron"), "{e}");
+    let scene_ron = out.join("scene.ron");
+    let kept = std::fs::read_to_string(&scene_ron).unwrap();
+    std::fs::write(&scene_ron, kept.replace("kappa: 30.0", "kappa: 20.0")).unwrap();
+    let e = refused(&good_path, &[], "other scene.ron");
+    assert!(e.contains("scene.ron"), "{e}");
+    std::fs::write(&scene_ron, kept).unwrap();
+    // The good one still restarts.
+    ok(&run(&[
+        "run",
+        "--restart",
+        s(&good_path),
+        "--until",
+        "0.2",
+        "--quiet",
+    ]));
+}
+
+#[test]
+fn blow_up_keeps_the_last_good_checkpoint() {
+    let d = tmp("blowup");
+    // A guard so tight that the vorticity a falling heavy disk makes trips it after about a
+    // dozen steps.
+    let text = BOX_2D
+        .replace("circulation: 0.2", "circulation: 0.002")
+        .replace("position: [0.45, 0.125]", "position: [0.45, 0.5]")
+        .replace("velocity: [0.1, -0.5]", "velocity: [0.0, 0.0]")
+        .replace("end_time: 0.3", "end_time: 0.3, blowup_factor: 80.0");
+    let scene = d.join("blowup.ron");
+    std::fs::write(&scene, text).unwrap();
+    let out = d.join("run");
+    let o = run(&[
+        "run",
+        s(&scene),
+        "--out",
+        s(&out),
+        "--checkpoint-every",
+        "0.004",
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{:?}", o.status);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("blow-up"), "{err}");
+    let ck = Checkpoint::load(&out.join(checkpoint::FILE_NAME)).unwrap();
+    assert!(ck.time.step > 0, "the guard tripped before any checkpoint");
+    let named = format!(
+        "the last good checkpoint is {} (step {}, t = {})",
+        out.join(checkpoint::FILE_NAME).display(),
+        ck.time.step,
+        ck.time.t
+    );
+    assert!(err.contains(&named), "{err}");
+    let log = std::fs::read_to_string(out.join("log.txt")).unwrap();
+    assert!(log.contains(&named), "{log}");
+    // The checkpoint is from before the failure: its state passed the guard.
+    assert!(ck.sample.max_omega <= 80.0 * ck.omega0);
+    assert!(ck.time.step >= 5);
+}
