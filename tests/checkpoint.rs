@@ -605,3 +605,188 @@ fn blow_up_keeps_the_last_good_checkpoint() {
     assert!(ck.sample.max_omega <= 80.0 * ck.omega0);
     assert!(ck.time.step >= 5);
 }
+
+// ---- HDF5 outputs (`--features hdf5`) ----
+
+/// Everything an HDF5 file holds, by path (`/group/dataset`, `/group@attribute`): shape, then
+/// values (floats as bits, strings as text). Not the file's bytes: depending on its version
+/// and settings, the HDF5 library may stamp objects with their modification time.
+#[cfg(feature = "hdf5")]
+fn h5_contents(path: &Path) -> std::collections::BTreeMap<String, (Vec<usize>, Vec<String>)> {
+    use hdf5::types::{TypeDescriptor as T, VarLenUnicode};
+    fn values(c: &hdf5::Container, what: &str) -> (Vec<usize>, Vec<String>) {
+        let v: Vec<String> = match c.dtype().unwrap().to_descriptor().unwrap() {
+            T::Float(_) => c
+                .read_raw::<f64>()
+                .unwrap()
+                .iter()
+                .map(|x| format!("{:016x}", x.to_bits()))
+                .collect(),
+            T::Unsigned(_) => c
+                .read_raw::<u64>()
+                .unwrap()
+                .iter()
+                .map(|x| x.to_string())
+                .collect(),
+            T::VarLenUnicode => c
+                .read_raw::<VarLenUnicode>()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_str().to_string())
+                .collect(),
+            d => panic!("{what}: unexpected type {d:?}"),
+        };
+        (c.shape(), v)
+    }
+    fn walk(
+        g: &hdf5::Group,
+        out: &mut std::collections::BTreeMap<String, (Vec<usize>, Vec<String>)>,
+    ) {
+        for a in g.attr_names().unwrap() {
+            let key = format!("{}@{a}", g.name());
+            out.insert(key.clone(), values(&g.attr(&a).unwrap(), &key));
+        }
+        for d in g.datasets().unwrap() {
+            out.insert(d.name(), values(&d, &d.name()));
+            assert!(d.attr_names().unwrap().is_empty(), "{}", d.name());
+        }
+        for sub in g.groups().unwrap() {
+            walk(&sub, out);
+        }
+    }
+    let file = hdf5::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut out = std::collections::BTreeMap::new();
+    walk(&file, &mut out);
+    out
+}
+
+/// The run directories `a` and `b` hold the same outputs: the same files (but the log, the
+/// timings, the plots, the checkpoint and scene.ron), identical bytes but for the HDF5 files,
+/// whose contents are identical.
+#[cfg(feature = "hdf5")]
+fn assert_same_outputs_h5(a: &Path, b: &Path) {
+    let names = |d: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .filter(|n| {
+                !n.ends_with(".png")
+                    && !["log.txt", "timings.csv", "scene.ron", checkpoint::FILE_NAME]
+                        .contains(&n.as_str())
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let (na, nb) = (names(a), names(b));
+    assert_eq!(
+        na,
+        nb,
+        "{} and {} hold other files",
+        a.display(),
+        b.display()
+    );
+    assert!(na.iter().any(|n| n == "fields.xmf"));
+    assert!(na.iter().any(|n| n == "series.h5"));
+    for n in &na {
+        if n.ends_with(".h5") {
+            let (x, y) = (h5_contents(&a.join(n)), h5_contents(&b.join(n)));
+            assert!(!x.is_empty(), "{n} is empty");
+            for (k, v) in &x {
+                assert!(y.get(k) == Some(v), "{n}: {k} differs after the restart");
+            }
+            assert_eq!(x.len(), y.len(), "{n}: other datasets or attributes");
+        } else {
+            let (x, y) = (std::fs::read(a.join(n)).unwrap(), std::fs::read(b.join(n)));
+            assert!(
+                y.as_ref().is_ok_and(|y| *y == x),
+                "{n} differs between {} and {}",
+                a.display(),
+                b.display()
+            );
+        }
+    }
+}
+
+/// A run with HDF5 output (`formats`) stopped at a checkpoint and restarted has the outputs of
+/// the run that never stopped: `fields.xmf`, every `fields_*.h5` and `series.h5` (and with
+/// VTK the `.vti` and `fields.pvd`, and the CSV time series). The restart starts from a run
+/// directory that went on past the checkpoint (more snapshots, rows and series.h5 entries),
+/// which it must cut back.
+#[cfg(feature = "hdf5")]
+fn hdf5_restart_reproduces_the_run(formats: &str, name: &str) {
+    let d = tmp(name);
+    let scene = d.join(format!("{name}.ron"));
+    let text = BOX_2D.replace(
+        "output: (every: 0.1)",
+        &format!("output: (every: 0.1, formats: {formats})"),
+    );
+    assert_ne!(text, BOX_2D);
+    std::fs::write(&scene, text).unwrap();
+    let straight = d.join("straight");
+    ok(&run(&["run", s(&scene), "--out", s(&straight), "--quiet"]));
+    let stopped = d.join("stopped");
+    ok(&run(&[
+        "run",
+        s(&scene),
+        "--out",
+        s(&stopped),
+        "--until",
+        "0.2",
+        "--checkpoint-every",
+        "0.07",
+        "--quiet",
+    ]));
+    let ck = stopped.join(checkpoint::FILE_NAME);
+    let at_02 = std::fs::read(&ck).unwrap();
+    let c = Checkpoint::load(&ck).unwrap();
+    assert_eq!(c.time.t, 0.2);
+    assert_eq!(c.progress.snapshots, 3);
+    // Go on to t = 0.45 (snapshots 3 to 5, more rows, a longer series.h5), then back to the
+    // checkpoint at t = 0.2 and on to the scene's end, t = 0.3.
+    ok(&run(&[
+        "run",
+        "--restart",
+        s(&ck),
+        "--until",
+        "0.45",
+        "--quiet",
+    ]));
+    assert!(stopped.join("fields_000005.h5").exists());
+    std::fs::write(&ck, &at_02).unwrap();
+    ok(&run(&[
+        "run",
+        "--restart",
+        s(&ck),
+        "--until",
+        "0.3",
+        "--quiet",
+    ]));
+    assert!(!stopped.join("fields_000004.h5").exists());
+    assert_same_outputs_h5(&straight, &stopped);
+    let xmf = std::fs::read_to_string(stopped.join("fields.xmf")).unwrap();
+    assert_eq!(xmf.matches("<Time ").count(), 4, "{xmf}");
+    let contacts = h5_contents(&stopped.join("series.h5"));
+    assert!(
+        contacts
+            .get("/contacts/t")
+            .is_some_and(|(shape, _)| shape[0] > 0),
+        "the scene should have contacts"
+    );
+    let log = std::fs::read_to_string(stopped.join("log.txt")).unwrap();
+    assert_eq!(log.matches("restart from").count(), 2, "{log}");
+    assert!(log.contains("finished: 75 steps"), "{log}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[cfg(feature = "hdf5")]
+#[test]
+fn restart_reproduces_vtk_and_hdf5_outputs() {
+    hdf5_restart_reproduces_the_run("[Vtk, Hdf5]", "h5-vtk");
+}
+
+#[cfg(feature = "hdf5")]
+#[test]
+fn restart_reproduces_hdf5_only_outputs() {
+    hdf5_restart_reproduces_the_run("[Hdf5]", "h5-only");
+}
