@@ -64,6 +64,10 @@ enum Command {
         /// Reduced resolution versions (as run in CI).
         #[arg(long)]
         quick: bool,
+        /// Write the PNG plots (measured curves over their references) to DIR, as
+        /// `<case>[-quick]-<name>.png`.
+        #[arg(long, value_name = "DIR", default_value = "validation")]
+        plots: PathBuf,
     },
     /// Time steps of a scene; prints one JSON line.
     Bench {
@@ -234,7 +238,11 @@ fn main() -> ExitCode {
             println!("  field memory about {mem:.0} MB (plus FFT buffers)");
             ExitCode::SUCCESS
         }
-        Command::Validate { cases, quick } => {
+        Command::Validate {
+            cases,
+            quick,
+            plots,
+        } => {
             let cases: Vec<String> = if cases.is_empty() {
                 CASES.iter().map(|s| s.to_string()).collect()
             } else {
@@ -245,6 +253,7 @@ fn main() -> ExitCode {
                 match run_case(case, quick) {
                     Ok(rep) => {
                         println!("{rep}");
+                        write_validation_plots(&rep, &plots);
                         if !rep.passed() {
                             failed += 1;
                         }
@@ -360,4 +369,26 @@ fn bench(mut scene: Scene, steps: usize, warmup: usize) -> anyhow::Result<String
         "peak_memory_bytes": peak_memory_bytes(),
     });
     Ok(line.to_string())
+}
+
+/// Writes the plots of a validation report to `dir` (created if needed), printing one line
+/// per file written; a plot that cannot be written is a warning, not a failure of the case.
+fn write_validation_plots(rep: &tumble::validate::Report, dir: &std::path::Path) {
+    if rep.plots.is_empty() {
+        return;
+    }
+    if let Err(e) = std::fs::create_dir_all(dir) {
+        eprintln!(
+            "warning: {}: cannot create the plot directory {}: {e}",
+            rep.case,
+            dir.display()
+        );
+        return;
+    }
+    for (path, res) in rep.write_plots(dir) {
+        match res {
+            Ok(()) => println!("  plot {}", path.display()),
+            Err(e) => eprintln!("warning: {}: plot not written: {e:#}", rep.case),
+        }
+    }
 }

@@ -57,6 +57,9 @@ pub enum Style {
     /// A hollow circle at each point, e.g. reference or published values drawn over a
     /// measured curve.
     Markers,
+    /// A dashed polyline, broken like [`Style::Line`]: a reference curve (analytic solution,
+    /// published value) drawn over a measured one.
+    Dashed,
 }
 
 /// One curve of a chart.
@@ -74,9 +77,9 @@ pub struct Series<'a> {
 ///
 /// Axis ranges cover the finite points of all series with a 5 % margin (constant data gets a
 /// range around its value). Points with a NaN or infinite coordinate, or one beyond 1e300 in
-/// magnitude, are skipped; a [`Style::Line`] series is broken there (an isolated point between
-/// gaps is drawn as a dot). Series with no such point are left out, also of the legend. If no
-/// series has a finite point, nothing is written and an error is returned.
+/// magnitude, are skipped; a [`Style::Line`] or [`Style::Dashed`] series is broken there (an
+/// isolated point between gaps is drawn as a dot). Series with no such point are left out, also
+/// of the legend. If no series has a finite point, nothing is written and an error is returned.
 ///
 /// `path` must end in `.png`. The chart is rendered to a temporary file `.tmp-*-NAME.png` in the
 /// same directory and renamed over `path`, so `path` is either the old file or the complete
@@ -147,7 +150,7 @@ fn finite_series<'a>(series: &[Series<'a>]) -> Vec<Drawn<'a>> {
         for &(x, y) in &s.points {
             if x.abs() <= LIMIT && y.abs() <= LIMIT {
                 cur.push((x, y));
-            } else if !cur.is_empty() && s.style == Style::Line {
+            } else if !cur.is_empty() && s.style != Style::Markers {
                 runs.push(std::mem::take(&mut cur));
             }
         }
@@ -311,6 +314,26 @@ fn render(
                     if k == 0 {
                         anno.label(s.label).legend(move |(x, y)| {
                             PathElement::new(vec![(x, y), (x + 24, y)], line)
+                        });
+                    }
+                }
+            }
+            Style::Dashed => {
+                for (k, run) in s.runs.iter().enumerate() {
+                    let anno = if run.len() == 1 {
+                        chart
+                            .draw_series(run.iter().map(|&p| Circle::new(p, 2, color.filled())))
+                            .map_err(plot_error)?
+                    } else {
+                        chart
+                            .draw_series(DashedLineSeries::new(run.iter().copied(), 10, 6, line))
+                            .map_err(plot_error)?
+                    };
+                    if k == 0 {
+                        anno.label(s.label).legend(move |(x, y)| {
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (9, 0)], line)
+                                + PathElement::new(vec![(15, 0), (24, 0)], line)
                         });
                     }
                 }

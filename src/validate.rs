@@ -3,14 +3,20 @@
 //!
 //! A case prints a table of quantity, reference, measured value, error and tolerance, then
 //! `PASS <case>` or `FAIL <case>`. `quick` runs a reduced version (used by `cargo test`).
+//!
+//! Cases with a reference curve or reference values also collect [`PlotSpec`]s while they run:
+//! the measured curve over the reference. [`run_case`] only collects them; `tumble validate`
+//! writes them as PNG files with [`Report::write_plots`].
 
 use crate::engine::Simulation;
 use crate::grid::Grid;
+use crate::plot::{Series, Style, line_chart};
 use crate::scene::{RemeshKernel, Scene};
 use crate::spectral::Spectral;
 use crate::systems::transport::{LineScratch, sweep};
 use std::f64::consts::PI;
 use std::fmt;
+use std::path::{Path, PathBuf};
 
 #[path = "validate_contact.rs"]
 mod contact;
@@ -130,6 +136,112 @@ impl Row {
     }
 }
 
+/// One curve of a validation plot.
+#[derive(Debug, Clone)]
+pub struct PlotSeries {
+    /// Legend text; a reference says what it is ("analytic: ...", "paper: ...").
+    pub label: String,
+    /// `(x, y)` points.
+    pub points: Vec<(f64, f64)>,
+    /// Whether this is a reference (drawn dashed, or as markers) rather than a measurement.
+    pub reference: bool,
+    /// How it is drawn.
+    pub style: Style,
+}
+
+/// A validation chart: measured curves over their references.
+#[derive(Debug, Clone)]
+pub struct PlotSpec {
+    /// File stem: the chart is written as `<case>[-quick]-<stem>.png`.
+    pub stem: String,
+    /// Chart title.
+    pub title: String,
+    /// Horizontal axis label.
+    pub x_label: String,
+    /// Vertical axis label.
+    pub y_label: String,
+    /// The curves, measured and reference.
+    pub series: Vec<PlotSeries>,
+}
+
+impl PlotSpec {
+    pub(crate) fn new(stem: &str, title: impl Into<String>, x_label: &str, y_label: &str) -> Self {
+        PlotSpec {
+            stem: stem.to_string(),
+            title: title.into(),
+            x_label: x_label.to_string(),
+            y_label: y_label.to_string(),
+            series: Vec::new(),
+        }
+    }
+    /// Adds a measured curve (solid line).
+    pub(crate) fn measured(mut self, label: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        self.series.push(PlotSeries {
+            label: label.into(),
+            points,
+            reference: false,
+            style: Style::Line,
+        });
+        self
+    }
+    /// Adds measured values drawn as markers (e.g. one value per grid).
+    pub(crate) fn measured_points(
+        mut self,
+        label: impl Into<String>,
+        points: Vec<(f64, f64)>,
+    ) -> Self {
+        self.series.push(PlotSeries {
+            label: label.into(),
+            points,
+            reference: false,
+            style: Style::Markers,
+        });
+        self
+    }
+    /// Adds a reference curve (dashed line).
+    pub(crate) fn reference(mut self, label: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        self.series.push(PlotSeries {
+            label: label.into(),
+            points,
+            reference: true,
+            style: Style::Dashed,
+        });
+        self
+    }
+    /// Adds reference values drawn as markers.
+    pub(crate) fn reference_points(
+        mut self,
+        label: impl Into<String>,
+        points: Vec<(f64, f64)>,
+    ) -> Self {
+        self.series.push(PlotSeries {
+            label: label.into(),
+            points,
+            reference: true,
+            style: Style::Markers,
+        });
+        self
+    }
+    /// Adds a horizontal reference line at `y` across the x range of the series so far.
+    pub(crate) fn reference_level(self, label: impl Into<String>, y: f64) -> Self {
+        let (lo, hi) = self.x_range();
+        self.reference(label, vec![(lo, y), (hi, y)])
+    }
+    /// The smallest and largest finite x of the series so far ((0, 1) if there is none).
+    fn x_range(&self) -> (f64, f64) {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for s in &self.series {
+            for &(x, _) in &s.points {
+                if x.is_finite() {
+                    lo = lo.min(x);
+                    hi = hi.max(x);
+                }
+            }
+        }
+        if lo <= hi { (lo, hi) } else { (0.0, 1.0) }
+    }
+}
+
 /// The outcome of one case.
 #[derive(Debug, Clone)]
 pub struct Report {
@@ -139,6 +251,10 @@ pub struct Report {
     pub rows: Vec<Row>,
     /// Extra information printed under the table.
     pub notes: Vec<String>,
+    /// Measured curves over their references, collected during the run (not yet drawn).
+    pub plots: Vec<PlotSpec>,
+    /// Whether this is the reduced (`quick`) version; part of the plot file names.
+    pub quick: bool,
 }
 
 impl Report {
@@ -147,11 +263,45 @@ impl Report {
             case: case.to_string(),
             rows: Vec::new(),
             notes: Vec::new(),
+            plots: Vec::new(),
+            quick: false,
         }
     }
     /// Whether every row passes.
     pub fn passed(&self) -> bool {
         !self.rows.is_empty() && self.rows.iter().all(Row::pass)
+    }
+    /// The file a plot is written to in `dir`: `<case>[-quick]-<stem>.png`.
+    pub fn plot_path(&self, dir: &Path, plot: &PlotSpec) -> PathBuf {
+        let quick = if self.quick { "-quick" } else { "" };
+        dir.join(format!("{}{quick}-{}.png", self.case, plot.stem))
+    }
+    /// Draws every plot of the report as a PNG in `dir` (which must exist); returns each
+    /// file with whether it was written.
+    pub fn write_plots(&self, dir: &Path) -> Vec<(PathBuf, anyhow::Result<()>)> {
+        self.plots
+            .iter()
+            .map(|p| {
+                let path = self.plot_path(dir, p);
+                let series: Vec<Series<'_>> = p
+                    .series
+                    .iter()
+                    .map(|s| Series {
+                        label: &s.label,
+                        points: s.points.clone(),
+                        style: s.style,
+                    })
+                    .collect();
+                let title = format!(
+                    "{}{}: {}",
+                    self.case,
+                    if self.quick { " (quick)" } else { "" },
+                    p.title
+                );
+                let res = line_chart(&path, &title, &p.x_label, &p.y_label, &series);
+                (path, res)
+            })
+            .collect()
     }
 }
 
@@ -197,7 +347,7 @@ impl fmt::Display for Report {
 
 /// Run one case by name.
 pub fn run_case(case: &str, quick: bool) -> anyhow::Result<Report> {
-    match case {
+    let mut rep = match case {
         "poisson" => Ok(poisson(quick)),
         "remesh" => Ok(remesh()),
         "lamb-oseen" => lamb_oseen(quick),
@@ -213,7 +363,9 @@ pub fn run_case(case: &str, quick: bool) -> anyhow::Result<Report> {
             "unknown validation case `{case}`; the cases are: {}",
             CASES.join(", ")
         ),
-    }
+    }?;
+    rep.quick = quick;
+    Ok(rep)
 }
 
 /// Velocity from a smooth periodic vorticity against the analytic velocity (2D and 3D).
@@ -445,7 +597,14 @@ fn lamb_oseen(quick: bool) -> anyhow::Result<Report> {
     let nu = scene.fluid.viscosity;
     let t_end = s0 * s0 / (4.0 * nu);
     let mut sim = Simulation::new(scene)?;
-    sim.run_until(t_end, |_| {})?;
+    let peak_of = |s: &Simulation| {
+        s.fields().omega()[0]
+            .iter()
+            .cloned()
+            .fold(f64::MIN, f64::max)
+    };
+    let mut peaks = vec![(sim.time(), peak_of(&sim))];
+    sim.run_until(t_end, |s| peaks.push((s.time(), peak_of(s))))?;
     let g = sim.grid().clone();
     let w = &sim.fields().omega()[0];
     let s2 = s0 * s0 + 4.0 * nu * sim.time();
@@ -488,6 +647,15 @@ fn lamb_oseen(quick: bool) -> anyhow::Result<Report> {
         g.n[1],
         sim.steps()
     ));
+    let exact: Vec<(f64, f64)> = peaks
+        .iter()
+        .map(|&(t, _)| (t, gamma / (PI * (s0 * s0 + 4.0 * nu * t))))
+        .collect();
+    rep.plots.push(
+        PlotSpec::new("peak", "peak vorticity", "t", "max ω")
+            .measured(format!("measured ({}x{})", g.n[0], g.n[1]), peaks)
+            .reference("analytic: Γ / (π (σ0² + 4νt))", exact),
+    );
     Ok(rep)
 }
 
@@ -506,6 +674,7 @@ fn taylor_green_2d(quick: bool) -> anyhow::Result<Report> {
     let mut sim = Simulation::new(scene)?;
     let e0 = sim.sample().energy;
     let mut worst = (0.0f64, 0.0f64, 0.0f64);
+    let mut curve = vec![(sim.time(), 1.0)];
     sim.run_until(t_end, |s| {
         let sm = s.sample();
         let exact = e0 * (-4.0 * nu * k * k * sm.t).exp();
@@ -513,6 +682,7 @@ fn taylor_green_2d(quick: bool) -> anyhow::Result<Report> {
         if err > worst.0 {
             worst = (err, sm.t, sm.energy);
         }
+        curve.push((sm.t, sm.energy / e0));
     })?;
     let sm = sim.sample();
     let mut rep = Report::new("taylor-green-2d");
@@ -534,6 +704,18 @@ fn taylor_green_2d(quick: bool) -> anyhow::Result<Report> {
         sim.grid().n[1],
         sim.steps()
     ));
+    let exact: Vec<(f64, f64)> = curve
+        .iter()
+        .map(|&(t, _)| (t, (-4.0 * nu * k * k * t).exp()))
+        .collect();
+    rep.plots.push(
+        PlotSpec::new("energy", "kinetic energy decay", "t", "E(t) / E0")
+            .measured(
+                format!("measured ({}x{})", sim.grid().n[0], sim.grid().n[1]),
+                curve,
+            )
+            .reference("analytic: exp(-2ν|k|²t), |k|² = 2k²", exact),
+    );
     Ok(rep)
 }
 
@@ -544,13 +726,16 @@ fn taylor_green_3d(quick: bool) -> anyhow::Result<Report> {
     const E5: f64 = 0.1184;
     let mut rep = Report::new("taylor-green-3d");
     let sizes: &[usize] = if quick { &[48] } else { &[64, 128] };
+    let mut plot = PlotSpec::new("energy", "kinetic energy, Re = 1600", "t", "E(t)");
     for &n in sizes {
         let mut scene = bundled_scene("taylor-green-3d.ron")?;
         scene.domain.cells = Some(vec![n, n, n]);
         let mut sim = Simulation::new(scene)?;
         let e0 = sim.sample().energy;
         let start = std::time::Instant::now();
-        sim.run_until(5.0, |_| {})?;
+        let mut curve = vec![(sim.time(), e0)];
+        sim.run_until(5.0, |s| curve.push((s.time(), s.sample().energy)))?;
+        plot = plot.measured(format!("measured {n}^3"), curve);
         let e = sim.sample().energy;
         rep.rows
             .push(Row::rel(format!("{n}^3: E(t = 5)"), E5, e, 0.02));
@@ -564,6 +749,8 @@ fn taylor_green_3d(quick: bool) -> anyhow::Result<Report> {
         rep.notes
             .push("quick: 48^3 only, with the 2% tolerance the case sets for 128^3".into());
     }
+    rep.plots
+        .push(plot.reference_points("spectral DNS: E(5) = 0.1184", vec![(5.0, E5)]));
     Ok(rep)
 }
 
@@ -596,6 +783,10 @@ struct Sedimentation {
     bounces: usize,
     /// Why the run stopped early, if it did.
     failure: Option<String>,
+    /// (t, vertical velocity of the disk) after every step.
+    vy: Vec<(f64, f64)>,
+    /// (t, height of the disk's centre) after every step.
+    y: Vec<(f64, f64)>,
 }
 
 /// One sedimentation-2d run at spacing `h`, step `dt` and contact strength `kappa`.
@@ -618,6 +809,8 @@ fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentatio
         final_speed: f64::NAN,
         bounces: 0,
         failure: None,
+        vy: Vec::new(),
+        y: Vec::new(),
     };
     let mut t_contact = None;
     let mut y_impact = f64::INFINITY;
@@ -631,6 +824,8 @@ fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentatio
         let Some(st) = dynamic_body(&mut sim) else {
             break;
         };
+        out.vy.push((sim.time(), st.velocity.y));
+        out.y.push((sim.time(), st.center.y));
         out.vmax = out.vmax.max(-st.velocity.y);
         out.ymin = out.ymin.min(st.center.y - r);
         if t_contact.is_none() && st.velocity.y >= 0.0 && sim.steps() > 10 {
@@ -763,17 +958,37 @@ fn sedimentation_2d(quick: bool) -> anyhow::Result<Report> {
         "kappa = 60: rebound {:.5}, lowest point {:.5}",
         doubled.rebound, doubled.ymin
     ));
+    // No external reference curve: the resolutions (and the stiffer contact) over each other.
+    let mut velocity = PlotSpec::new("velocity", "vertical velocity of the disk", "t", "v_y");
+    let mut height = PlotSpec::new("height", "height of the disk's centre", "t", "y");
+    for (&(h, dt), s) in runs.iter().zip(&res) {
+        let label = format!("h = 1/{:.0}, dt = {dt}, kappa = 30", 1.0 / h);
+        velocity = velocity.measured(label.clone(), s.vy.clone());
+        height = height.measured(label, s.y.clone());
+    }
+    let label = format!("h = 1/{:.0}, dt = {dt}, kappa = 60", 1.0 / h);
+    velocity = velocity.measured(label.clone(), doubled.vy);
+    height = height
+        .measured(label, doubled.y)
+        .reference_level("touching the floor (y = r)", 0.125);
+    rep.plots.push(velocity);
+    rep.plots.push(height);
     Ok(rep)
 }
 
 /// One sphere-settling run: terminal velocity (downwards) at t = 1.2.
 fn settling_run(h: f64, d: f64, nu: f64) -> anyhow::Result<f64> {
-    settling_run_with(h, d, nu, None)
+    Ok(settling_run_with(h, d, nu, None)?.0)
 }
 
 /// A sphere-settling run, optionally with the sphere replaced by a mesh file (relative to
-/// `scenes/`).
-fn settling_run_with(h: f64, d: f64, nu: f64, mesh: Option<&str>) -> anyhow::Result<f64> {
+/// `scenes/`): the velocity (downwards) at t = 1.2 and (t, velocity) after every step.
+fn settling_run_with(
+    h: f64,
+    d: f64,
+    nu: f64,
+    mesh: Option<&str>,
+) -> anyhow::Result<(f64, Vec<(f64, f64)>)> {
     let mut scene = bundled_scene("sphere-settling.ron")?;
     scene.base_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let wall = 2.0 * h;
@@ -803,9 +1018,16 @@ fn settling_run_with(h: f64, d: f64, nu: f64, mesh: Option<&str>) -> anyhow::Res
         }
     }
     let mut sim = Simulation::new(scene)?;
-    sim.run_until(1.2, |_| {})?;
+    let mut curve = Vec::new();
+    sim.set_stop_at(Some(1.2));
+    while sim.time() < 1.2 * (1.0 - 1e-12) {
+        sim.step()?;
+        if let Some(st) = dynamic_body(&mut sim) {
+            curve.push((sim.time(), -st.velocity.z));
+        }
+    }
     let st = dynamic_body(&mut sim).ok_or_else(|| anyhow::anyhow!("no sphere"))?;
-    Ok(-st.velocity.z)
+    Ok((-st.velocity.z, curve))
 }
 
 /// Paper section 4.2.1, Table 1: terminal velocities of spheres settling in a tube.
@@ -828,10 +1050,21 @@ fn sphere_settling(quick: bool) -> anyhow::Result<Report> {
     let h = 1.0 / 64.0;
     let mut u64_d3_nu02 = None;
     for (d, nu, ue, up) in cases {
-        let u = settling_run(h, d, nu)?;
+        let (u, curve) = settling_run_with(h, d, nu, None)?;
         if d == 0.3 && nu == 0.02 {
             u64_d3_nu02 = Some(u);
         }
+        rep.plots.push(
+            PlotSpec::new(
+                &format!("velocity-d{d}-nu{nu}"),
+                format!("settling velocity, d = {d}, ν = {nu}, h = 1/64"),
+                "t",
+                "U (downwards)",
+            )
+            .measured("measured, h = 1/64", curve)
+            .reference_level(format!("paper, h = 1/64: U = {up}"), up)
+            .reference_level(format!("experiment: U_E = {ue}"), ue),
+        );
         rep.rows.push(Row::rel(
             format!("d = {d}, ν = {nu}: U(t = 1.2) at h = 1/64 vs paper"),
             up,
@@ -854,7 +1087,7 @@ fn sphere_settling(quick: bool) -> anyhow::Result<Report> {
         us.push((1.0 / 96.0, settling_run(1.0 / 96.0, 0.3, 0.02)?));
         // The icosphere mesh (radius 0.15) against the analytic sphere of the same size.
         if let Some(u) = u64_d3_nu02 {
-            let um = settling_run_with(h, 0.3, 0.02, Some("meshes/icosphere.obj"))?;
+            let um = settling_run_with(h, 0.3, 0.02, Some("meshes/icosphere.obj"))?.0;
             rep.rows.push(Row::rel(
                 "d = 0.3, ν = 0.02: mesh icosphere U vs analytic sphere U",
                 u,
@@ -882,6 +1115,18 @@ fn sphere_settling(quick: bool) -> anyhow::Result<Report> {
             if monotone { 1.0 } else { 0.0 },
             0.0,
         ));
+        rep.plots.push(
+            PlotSpec::new(
+                "grid-study",
+                "grid study, d = 0.3, ν = 0.02: U(t = 1.2) against h",
+                "h",
+                "U (downwards)",
+            )
+            .measured("measured", us.clone())
+            .measured_points("first-order extrapolation h → 0", vec![(0.0, extrap)])
+            .reference_points("paper, h = 1/64: U = 1.39", vec![(1.0 / 64.0, 1.39)])
+            .reference_points("paper, h → 0: U = 1.51", vec![(0.0, 1.51)]),
+        );
         rep.notes.push(format!(
             "grid study d = 0.3, ν = 0.02: {}",
             us.iter()

@@ -1,7 +1,7 @@
 //! Validation of the collision model: the paper's Fig. 1 (rebound in vacuum), Fig. 9 (ellipsoid
 //! on a sphere) and section 4.2.2 (drafting, kissing and tumbling).
 
-use super::{Report, Row, bundled_scene};
+use super::{PlotSpec, Report, Row, bundled_scene};
 use crate::bodies::{Body, ContactState, Material, RigidState};
 use crate::engine::Simulation;
 use glam::DVec3;
@@ -40,6 +40,19 @@ fn leapfrog_mid(prev: &RigidState, s: &RigidState) -> RigidState {
     }
 }
 
+/// The relative change of the total energy against t, with the exact value 0 (the cases allow
+/// 5%; the tolerance is not drawn, it would flatten the curve).
+fn energy_plot(echange: Vec<(f64, f64)>) -> PlotSpec {
+    PlotSpec::new(
+        "energy",
+        "total energy (kinetic + gravity + contact)",
+        "t",
+        "(E - E0) / E0",
+    )
+    .measured("measured", echange)
+    .reference_level("exact: conserved", 0.0)
+}
+
 /// Paper Fig. 1: a disk dropped in vacuum on a plane rebounds to its drop height.
 pub fn rebound_vacuum(quick: bool) -> anyhow::Result<Report> {
     // The full case takes a few seconds, so `quick` runs it unchanged.
@@ -52,7 +65,7 @@ pub fn rebound_vacuum(quick: bool) -> anyhow::Result<Report> {
     let eps = scene.contact.eps.unwrap_or(h);
     let end = scene.numerics.end_time;
     let mut sim = Simulation::new(scene)?;
-    let mut ys = Vec::new();
+    let mut ys = vec![(sim.time(), y0)];
     sim.set_stop_at(Some(end));
     while sim.time() < end * (1.0 - 1e-12) {
         sim.step()?;
@@ -102,6 +115,12 @@ pub fn rebound_vacuum(quick: bool) -> anyhow::Result<Report> {
             .collect::<Vec<_>>()
             .join(", ")
     ));
+    rep.plots.push(
+        PlotSpec::new("height", "height of the disk's centre", "t", "y")
+            .measured("measured", ys)
+            .reference_level(format!("drop height (centre at y = {y0})"), y0)
+            .reference_level(format!("touching the plane (y = r = {r})"), r),
+    );
     Ok(rep)
 }
 
@@ -125,6 +144,7 @@ pub fn ellipsoid_sphere(quick: bool) -> anyhow::Result<Report> {
     // the contact potential of x_k. The energy of x_k is taken with v_k = (v_{k-1/2} +
     // v_{k+1/2})/2 (the standard leapfrog energy), and likewise for Ω.
     let mut prev: Option<RigidState> = None;
+    let mut echange = Vec::new();
     while sim.time() < end * (1.0 - 1e-12) {
         sim.step()?;
         let st = dynamic_states(&mut sim);
@@ -133,6 +153,7 @@ pub fn ellipsoid_sphere(quick: bool) -> anyhow::Result<Report> {
             let e = energy(&leapfrog_mid(&p, s), *rho, g, floor) + contact_energy;
             let e0 = *e0.get_or_insert(e);
             emax_dev = emax_dev.max(((e - e0) / e0).abs());
+            echange.push((sim.time(), (e - e0) / e0));
         }
         prev = Some(*s);
         if let Some(c) = sim
@@ -172,6 +193,7 @@ pub fn ellipsoid_sphere(quick: bool) -> anyhow::Result<Report> {
         "max |omega| after contact per axis: {:.3}, {:.3}, {:.3} rad/time",
         wmax.x, wmax.y, wmax.z
     ));
+    rep.plots.push(energy_plot(echange));
     Ok(rep)
 }
 
@@ -209,6 +231,24 @@ pub fn dkt(quick: bool) -> anyhow::Result<Report> {
         }
         sep.push((t, (d.x * d.x + d.y * d.y).sqrt(), gap));
     }
+    rep.plots.push(
+        PlotSpec::new("gap", "gap between the spheres", "t", "gap / h")
+            .measured(
+                "measured",
+                sep.iter().map(|&(t, _, gap)| (t, gap / h)).collect(),
+            )
+            .reference_level("paper: gap ≈ h while kissing", 1.0),
+    );
+    rep.plots.push(
+        PlotSpec::new(
+            "horizontal",
+            "horizontal distance of the centres",
+            "t",
+            "distance",
+        )
+        .measured("measured", sep.iter().map(|&(t, d, _)| (t, d)).collect())
+        .reference_level(format!("one radius ({r}): exceeded at t = 0.6"), r),
+    );
     let tk = t_kiss.unwrap_or(f64::NAN);
     rep.rows.push(Row::abs(
         "time the gap first drops under 2h (kiss), in [0.25, 0.4]",
@@ -282,6 +322,7 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
     let mut prev: Option<Vec<RigidState>> = None;
     let mut e0 = None;
     let mut dev = 0.0f64;
+    let mut echange = Vec::new();
     let mut worst = f64::INFINITY;
     while sim.time() < end * (1.0 - 1e-12) {
         sim.step()?;
@@ -294,6 +335,7 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
             }
             let e0 = *e0.get_or_insert(e);
             dev = dev.max(((e - e0) / e0).abs());
+            echange.push((sim.time(), (e - e0) / e0));
         }
         for (a, (_, sa, _, _)) in st.iter().enumerate() {
             for ax in 0..3 {
@@ -322,5 +364,6 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
         "{n} spheres to t = {end}: smallest gap {worst:.5} ({:.3} eps)",
         worst / eps
     ));
+    rep.plots.push(energy_plot(echange));
     Ok(rep)
 }

@@ -176,6 +176,44 @@ fn validate_unknown_case_fails() {
 }
 
 #[test]
+fn validate_writes_the_plots_to_the_plots_dir() {
+    // taylor-green-2d --quick: 64², 100 steps, well under a second.
+    let d = tmp("valplots");
+    let dir = d.join("plots");
+    let out = tumble()
+        .args(["validate", "taylor-green-2d", "--quick", "--plots"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = dir.join("taylor-green-2d-quick-energy.png");
+    assert!(
+        stdout.contains(&png.display().to_string()),
+        "the file written is printed: {stdout}"
+    );
+    let bytes = std::fs::read(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{}", png.display());
+    assert!(
+        bytes.len() > 10_000,
+        "{}: {} bytes",
+        png.display(),
+        bytes.len()
+    );
+    // Nothing else: no temporary files left behind.
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 1, "{names:?}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
 fn check_rejects_a_missing_mesh_with_status_2() {
     let d = tmp("mesh");
     let scene = d.join("m.ron");

@@ -60,6 +60,19 @@ fn line_chart_writes_a_900x600_png_and_no_temp_file() {
                 points: reference,
                 style: Style::Markers,
             },
+            Series {
+                label: "analytic, broken by a NaN and an isolated point",
+                points: vec![
+                    (0.0, 1.0),
+                    (2.5, (-2.5f64).exp()),
+                    (3.0, f64::NAN),
+                    (3.5, 0.05),
+                    (4.0, f64::INFINITY),
+                    (4.5, 0.02),
+                    (5.0, (-5f64).exp()),
+                ],
+                style: Style::Dashed,
+            },
         ],
     )
     .unwrap();
