@@ -367,6 +367,38 @@ pub fn collision(
             )
         })
         .collect_into_vec(&mut c.results);
+    // Two dynamic bodies: one pair potential for both. Each direction is the exact gradient of
+    // its own band's potential U_ij (i's band in φ_j), and the two discrete potentials are not
+    // equal (the band is about one lattice spacing thick), so using each alone breaks
+    // Newton's third law and lets a dense pile gain energy collision after collision (200
+    // spheres in vacuum: +8% in one time unit, the same at half the step). The pair instead
+    // derives both forces from V = (U_ij + U_ji)/2: F_i = (F_ij - F_ji)/2 and
+    // T_i = (T_ij - T_ji - (x_j - x_i) × F_ji)/2 about the centroids (by translation
+    // invariance, -∇_i U_ji is the reaction of F_ji and -∂U_ji/∂θ_i its moment about x_i),
+    // which conserves momentum, angular momentum and energy exactly.
+    for k in 0..c.pairs.len().saturating_sub(1) {
+        let ((r, s, _), (r2, s2, _)) = (c.pairs[k], c.pairs[k + 1]);
+        if r2 != s || s2 != r || !boxes[s].dynamic {
+            continue;
+        }
+        let (Ok(bi), Ok(bj)) = (bodies.get(boxes[r].entity), bodies.get(boxes[s].entity)) else {
+            continue;
+        };
+        let arm = bj.2.centroid - bi.2.centroid;
+        let (a, b) = (&c.results[k], &c.results[k + 1]);
+        let (fi, fj) = (0.5 * (a.force - b.force), 0.5 * (b.force - a.force));
+        let ti = 0.5 * (a.torque - b.torque - arm.cross(b.force));
+        let tj = 0.5 * (b.torque - a.torque + arm.cross(a.force));
+        let any = a.any || b.any;
+        let gap = a.gap.min(b.gap);
+        for (res, f, t) in [(k, fi, ti), (k + 1, fj, tj)] {
+            let out = &mut c.results[res];
+            out.force = f;
+            out.torque = t;
+            out.any = any;
+            out.gap = gap;
+        }
+    }
     // Sum in the fixed pair order; one record per unordered close pair.
     c.records.clear();
     for (&(r, s, _), res) in c.pairs.iter().zip(&c.results) {
