@@ -146,7 +146,8 @@ pub struct ContactState {
     /// Contact torque on the body this step, about its centroid.
     pub torque: DVec3,
     /// Contact potential energy of the body this step: the sum over its band of
-    /// ρ_i κ/ε ζ(φ_i/ε) E₁(d/ε) dV, whose rigid-motion gradient is the contact force; halved
+    /// ρ_i κ/ε ζ(φ_i/ε) (E₁(d/ε) - E₁(range)) dV (zero where the force is cut off), whose
+    /// rigid-motion gradient is the contact force; halved
     /// for a pair of dynamic bodies (each pair potential is shared by the two bodies).
     pub potential: f64,
 }

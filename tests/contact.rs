@@ -244,3 +244,53 @@ fn contact_between_two_dynamic_bodies_balances_force_and_torque() {
     }
     assert!(touched >= 3, "the ellipsoids never touched");
 }
+
+/// Two spheres released at rest a little over 2ε apart are pushed apart by the contact force
+/// alone: once out of range, their kinetic energy is the contact potential they started with
+/// (the potential of the force as applied, zero beyond the cut-off).
+#[test]
+fn spheres_pushed_apart_turn_their_contact_potential_into_kinetic_energy() {
+    let mut s = sim(r#"Scene(
+        domain: (extent: [1.0, 1.0, 1.0], cells: [64, 64, 64]),
+        vacuum: true,
+        contact: (kappa: 25.0),
+        numerics: (dt: Fixed(0.0002), end_time: 1.0),
+        bodies: [
+            (name: "a", shape: Sphere(radius: 0.05), density: 1.5, position: [0.4, 0.5, 0.5]),
+            (name: "b", shape: Sphere(radius: 0.05), density: 1.5, position: [0.535, 0.503, 0.497]),
+        ],
+    )"#);
+    let energies = |s: &mut Simulation| {
+        let mut q = s.world.query::<(
+            &Body,
+            &RigidState,
+            &tumble::bodies::Material,
+            &tumble::bodies::ContactState,
+        )>();
+        let (mut kinetic, mut potential) = (0.0, 0.0);
+        for (_, st, m, c) in q.iter(&s.world).filter(|e| e.0.is_dynamic()) {
+            let w = st.angular_velocity;
+            kinetic += 0.5 * m.density * st.volume * st.velocity.length_squared()
+                + 0.5 * w.dot(m.density * (st.inertia * w));
+            potential += c.potential;
+        }
+        (kinetic, potential)
+    };
+    s.step().unwrap();
+    // The first step's contact acts at the initial positions.
+    let (_, v0) = energies(&mut s);
+    s.set_stop_at(Some(0.1));
+    while s.time() < 0.1 - 1e-12 {
+        s.step().unwrap();
+    }
+    let (k, v) = energies(&mut s);
+    println!("initial contact potential {v0:.6e}, final kinetic {k:.6e}, final potential {v:.3e}");
+    assert!(
+        v0 > 0.0 && v == 0.0,
+        "the spheres should start in range and end out of it"
+    );
+    assert!(
+        (k - v0).abs() < 0.02 * v0,
+        "kinetic {k} against potential {v0}"
+    );
+}

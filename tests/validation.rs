@@ -52,6 +52,12 @@ fn rebound_in_vacuum_keeps_the_drop_height() {
 }
 
 #[test]
+fn tank_of_fifty_spheres_in_vacuum_keeps_its_energy() {
+    // 50 of the 200 spheres of `tank-200-vacuum` to t = 0.5 (about 10 s): total energy within 5%.
+    check("tank-vacuum");
+}
+
+#[test]
 fn ellipsoid_on_sphere_spins_about_three_axes_and_keeps_its_energy() {
     // Paper Fig. 9, full resolution (a few seconds).
     check("ellipsoid-sphere");
