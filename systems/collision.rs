@@ -530,8 +530,8 @@ fn directed(
     let far = (radius_j + cut).powi(2);
     let inv = sj.orientation.inverse();
     let ls = &shj.level_set;
-    // The gradient of φ_j by a narrow central difference: the local gradient of its
-    // (trilinear) interpolant.
+    // The gradient of φ_j is that of its (trilinear) interpolant, exactly for a sampled level
+    // set and by a narrow central difference for an analytic one.
     let delta = 1e-3 * grid.h;
     let d_min = 0.05 * eps;
     let coef = rho_i * kappa;
@@ -546,15 +546,10 @@ fn directed(
             continue;
         }
         let xl = inv * (x - sj.center);
-        let d = -ls.phi(xl);
+        let (phi_j, g) = ls.phi_grad(xl, delta, grid.dim);
+        let d = -phi_j;
         if d > cut {
             continue;
-        }
-        let mut g = DVec3::ZERO;
-        for ax in 0..grid.dim {
-            let mut e = DVec3::ZERO;
-            e[ax] = delta;
-            g[ax] = (ls.phi(xl + e) - ls.phi(xl - e)) / (2.0 * delta);
         }
         // Not normalised: the force is then the exact gradient of the potential below, also
         // where an interpolated φ_j has |∇φ_j| slightly off 1.

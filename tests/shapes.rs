@@ -1286,3 +1286,47 @@ fn ron_syntax() {
     let back = ron::to_string(&s).unwrap();
     assert_eq!(ron::from_str::<Shape>(&back).unwrap(), s);
 }
+
+/// The gradient the contact force uses is the gradient of the interpolated level set itself:
+/// it matches a central difference of `phi` (inside the sampled box, where the interpolant is
+/// trilinear, and outside it, where the distance term takes over), in 3D and 2D.
+#[test]
+fn level_set_gradient_is_the_gradient_of_the_interpolant() {
+    let h = 0.05;
+    let shapes = [
+        (
+            Shape::Ellipsoid {
+                radii: [0.3, 0.2, 0.15],
+            },
+            3,
+        ),
+        (Shape::Ellipse { radii: [0.3, 0.2] }, 2),
+    ];
+    for (shape, dim) in shapes {
+        let ls = LocalLevelSet::new(build(shape), h, 3.0 * h, dim);
+        let mut worst = 0.0f64;
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..2000 {
+            let mut p = DVec3::new(rnd(), rnd(), rnd()) * 1.2;
+            if dim == 2 {
+                p.z = 0.0;
+            }
+            let (v, g) = ls.phi_grad(p, 1e-4 * h, dim);
+            assert_eq!(v, ls.phi(p));
+            let d = 1e-7;
+            for ax in 0..dim {
+                let mut e = DVec3::ZERO;
+                e[ax] = d;
+                let fd = (ls.phi(p + e) - ls.phi(p - e)) / (2.0 * d);
+                worst = worst.max((fd - g[ax]).abs());
+            }
+        }
+        assert!(worst < 1e-6, "dim {dim}: largest gradient mismatch {worst}");
+    }
+}
