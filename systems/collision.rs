@@ -31,12 +31,12 @@
 //! rebound depend on κ. In vacuum the time step resolves the contact and the plain force at
 //! the current poses keeps symplectic Euler symplectic.
 //!
-//! Broad phase: each bounded body's box (its patch, which already reaches a band of 6h beyond
-//! the body) grown to the contact range; boxes are swept along x (sort and sweep) and only
-//! overlapping pairs are evaluated, so the cost follows the number of close pairs, not the
-//! number of bodies squared. An unbounded body (a wall, a tank) is tested against a body i by
-//! its signed distance at i's centre. Pairs are evaluated in parallel and added in a fixed
-//! order, so results do not depend on the thread count.
+//! Broad phase: each bounded body's box (its grid patch) grown by the contact range; boxes
+//! are swept along x (sort and sweep) and only overlapping pairs are evaluated, so the cost
+//! follows the number of close pairs, not the number of bodies squared. An unbounded body (a
+//! wall, a tank) is tested against a body i by its signed distance at i's centre. Pairs are
+//! evaluated in parallel and added in a fixed order, so results do not depend on the thread
+//! count.
 
 use crate::bodies::{
     Body, BodyShape, ContactPoints, ContactState, GridPatch, Material, RigidState,
@@ -130,6 +130,10 @@ struct PairResult {
     potential: f64,
     gap: f64,
     any: bool,
+    /// Set when both bodies of a dynamic pair were stepped together (`substepped_pair`):
+    /// `force`, `torque` are already the pair's balanced values, and `partner` holds the
+    /// partner's (force, torque, potential), for the reverse directed pair.
+    partner: Option<(DVec3, DVec3, f64)>,
 }
 
 /// The exponential integral E₁(x) = ∫_x^∞ e^{-s}/s ds for x > 0 (series below 1, continued
@@ -234,7 +238,9 @@ pub fn collision(
     let timer = SystemTimer::start();
     let eps = cp.eps;
     let cut = cp.range * eps;
-    let grow = (cut - crate::bodies::band(&grid)).max(0.0) + grid.h;
+    // The patch reaches only a few cells beyond the body (`level_sets::patch_reach`): grow its
+    // box by the whole contact range, plus a cell for the node rounding.
+    let grow = cut + grid.h;
     let c = &mut *contacts;
     c.boxes.clear();
     for (entity, body, state, shape, patch, _, points) in &bodies {
@@ -356,6 +362,22 @@ pub fn collision(
                     cut,
                 );
             }
+            if boxes[r].dynamic && boxes[s].dynamic {
+                // Both bodies are stepped together, once, in the task of the lower id; the
+                // reverse directed pair takes its share from that result.
+                if boxes[r].id > boxes[s].id {
+                    return PairResult::default();
+                }
+                return substepped_pair(
+                    grid,
+                    (ri.1, ri.2, ri.6, ri.5.density, ri.3, boxes[r].radius),
+                    (sj.1, sj.2, sj.6, sj.5.density, sj.3, boxes[s].radius),
+                    kappa,
+                    eps,
+                    cut,
+                    dt,
+                );
+            }
             substepped(
                 grid,
                 (ri.1, ri.2, ri.6, ri.5.density),
@@ -379,6 +401,18 @@ pub fn collision(
     for k in 0..c.pairs.len().saturating_sub(1) {
         let ((r, s, _), (r2, s2, _)) = (c.pairs[k], c.pairs[k + 1]);
         if r2 != s || s2 != r || !boxes[s].dynamic {
+            continue;
+        }
+        if let Some((f, t, potential)) = c.results[k].partner {
+            let (any, gap) = (c.results[k].any, c.results[k].gap);
+            c.results[k + 1] = PairResult {
+                force: f,
+                torque: t,
+                potential,
+                gap,
+                any,
+                partner: None,
+            };
             continue;
         }
         let (Ok(bi), Ok(bj)) = (bodies.get(boxes[r].entity), bodies.get(boxes[s].entity)) else {
@@ -495,6 +529,102 @@ fn substepped(
         potential: first.potential,
         gap: first.gap,
         any: any || first.any,
+        partner: None,
+    }
+}
+
+/// Two dynamic bodies in contact over a step of length `dt`, resolved in time together: the
+/// step is cut into sub-steps in which they approach by at most ε/4, and in each both bodies'
+/// velocities (linear and angular) are advanced by the pair's balanced force and torques (the
+/// combination of the two directed forces described in `collision`), then both move on. With
+/// each body sub-stepped against a partner moving on unaffected (`substepped`), each would
+/// absorb the whole relative velocity: a stiff head-on contact between equal spheres within one
+/// step would exchange twice the right impulse. Returns the mean force and torque on `i` over
+/// the step, the same for `j` in `partner`, each body's band potential and the gap at the
+/// start.
+#[allow(clippy::too_many_arguments)]
+fn substepped_pair(
+    grid: &Grid,
+    i: (&Body, &RigidState, &ContactPoints, f64, &BodyShape, f64),
+    j: (&Body, &RigidState, &ContactPoints, f64, &BodyShape, f64),
+    kappa: f64,
+    eps: f64,
+    cut: f64,
+    dt: f64,
+) -> PairResult {
+    let (bi, si, pi, rho_i, shi, radius_i) = i;
+    let (bj, sj, pj, rho_j, shj, radius_j) = j;
+    let pair = |a: &RigidState, b: &RigidState| {
+        let ra = directed(grid, a, pi, rho_i, b, shj, radius_j, kappa, eps, cut);
+        let rb = directed(grid, b, pj, rho_j, a, shi, radius_i, kappa, eps, cut);
+        let arm = b.centroid - a.centroid;
+        let fa = 0.5 * (ra.force - rb.force);
+        let ta = 0.5 * (ra.torque - rb.torque - arm.cross(rb.force));
+        let tb = 0.5 * (rb.torque - ra.torque + arm.cross(ra.force));
+        (ra, rb, fa, ta, tb)
+    };
+    let (ra, rb, fa, ta, tb) = pair(si, sj);
+    let first = PairResult {
+        force: fa,
+        torque: ta,
+        potential: ra.potential,
+        gap: ra.gap.min(rb.gap),
+        any: ra.any || rb.any,
+        partner: Some((-fa, tb, rb.potential)),
+    };
+    let (mi, mj) = (rho_i * si.volume, rho_j * sj.volume);
+    if dt <= 0.0 || mi <= 0.0 || mj <= 0.0 {
+        return first;
+    }
+    let approach = (si.velocity - sj.velocity).length() * dt;
+    let n = ((approach / (0.25 * eps)).ceil() as usize).clamp(1, 64);
+    if n == 1 && !first.any {
+        return first;
+    }
+    let inverse = |rho: f64, s: &RigidState| {
+        let jw = rho * s.inertia;
+        if grid.dim == 2 {
+            let jz = jw.z_axis.z;
+            glam::DMat3::from_diagonal(DVec3::new(0.0, 0.0, if jz > 0.0 { 1.0 / jz } else { 0.0 }))
+        } else if jw.determinant().abs() > 0.0 {
+            jw.inverse()
+        } else {
+            glam::DMat3::ZERO
+        }
+    };
+    let (ji, jj) = (inverse(rho_i, si), inverse(rho_j, sj));
+    let tau = dt / n as f64;
+    let (mut a, mut b) = (*si, *sj);
+    let (mut f, mut t_a, mut t_b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+    let mut any = first.any;
+    for k in 0..n {
+        let (fa, ta, tb) = if k == 0 {
+            (
+                first.force,
+                first.torque,
+                first.partner.map_or(DVec3::ZERO, |p| p.1),
+            )
+        } else {
+            let (ra, rb, fa, ta, tb) = pair(&a, &b);
+            any |= ra.any || rb.any;
+            (fa, ta, tb)
+        };
+        f += fa * tau;
+        t_a += ta * tau;
+        t_b += tb * tau;
+        a.velocity += fa * tau / mi;
+        b.velocity -= fa * tau / mj;
+        a.angular_velocity += ji * (ta * tau);
+        b.angular_velocity += jj * (tb * tau);
+        a = ahead(bi, &a, tau);
+        b = ahead(bj, &b, tau);
+    }
+    PairResult {
+        force: f / dt,
+        torque: t_a / dt,
+        any,
+        partner: Some((-f / dt, t_b / dt, first.partner.map_or(0.0, |p| p.2))),
+        ..first
     }
 }
 
