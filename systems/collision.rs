@@ -176,6 +176,40 @@ pub fn exp_integral_e1(x: f64) -> f64 {
     }
 }
 
+/// E₁ for the contact potential, by cubic Hermite interpolation in ln x of a table of exact
+/// values and slopes (d E₁/d ln x = -e^{-x}) on [1/32, 64], 4096 intervals (absolute error
+/// below 1e-14; about 1e-11 relative at x = 6, the default cut-off); the exact function
+/// outside. The continued fraction took half the collision system's time with 200 spheres.
+pub fn exp_integral_e1_fast(x: f64) -> f64 {
+    const N: usize = 4096;
+    const LO: f64 = -3.465_735_902_799_726_5; // ln(1/32)
+    const HI: f64 = 4.158_883_083_359_671_5; // ln 64
+    static TABLE: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::new();
+    let t = x.ln();
+    if !(LO..HI).contains(&t) {
+        return exp_integral_e1(x);
+    }
+    let dt = (HI - LO) / N as f64;
+    // (E₁, dt d E₁/d ln x) at the nodes.
+    let table = TABLE.get_or_init(|| {
+        (0..=N)
+            .map(|k| {
+                let x = (LO + dt * k as f64).exp();
+                (exp_integral_e1(x), -(-x).exp() * dt)
+            })
+            .collect()
+    });
+    let u = (t - LO) / dt;
+    let k = (u as usize).min(N - 1);
+    let s = u - k as f64;
+    let ((y0, m0), (y1, m1)) = (table[k], table[k + 1]);
+    let (s2, s3) = (s * s, s * s * s);
+    (2.0 * s3 - 3.0 * s2 + 1.0) * y0
+        + (s3 - 2.0 * s2 + s) * m0
+        + (-2.0 * s3 + 3.0 * s2) * y1
+        + (s3 - s2) * m1
+}
+
 /// The close pairs of the last step (`records`) and the system's scratch buffers, kept so a
 /// step does not allocate once they have grown.
 #[derive(Resource, Debug, Default)]
@@ -687,7 +721,7 @@ fn directed(
         let dd = d.max(d_min);
         let f = -(coef * w * (-dd / eps).exp() / dd) * n;
         // The potential whose (rigid-motion) gradient this force is.
-        out.potential += coef * w * (exp_integral_e1(dd / eps) - e1_cut);
+        out.potential += coef * w * (exp_integral_e1_fast(dd / eps) - e1_cut);
         out.force += f;
         out.torque += (x - si.centroid).cross(f);
         out.gap = out.gap.min(d - phi_i);

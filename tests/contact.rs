@@ -345,3 +345,32 @@ fn stiff_head_on_contact_in_a_fluid_step_exchanges_the_right_impulse() {
     assert!((dv[1].1.x - 2.0).abs() < 0.1, "b: {}", dv[1].1);
     assert!((dv[0].1 + dv[1].1).length() < 1e-9, "momentum");
 }
+
+/// The exponential integral of the contact potential: tabulated values (Abramowitz & Stegun,
+/// Table 5.1) and the fast interpolated form used per contact point, against the exact one.
+#[test]
+fn exponential_integral_matches_tables_and_its_fast_form() {
+    use tumble::systems::collision::{exp_integral_e1, exp_integral_e1_fast};
+    for (x, e1) in [
+        (0.1, 1.822_923_958_4),
+        (0.5, 0.559_773_594_8),
+        (1.0, 0.219_383_934_4),
+        (2.0, 0.048_900_510_7),
+        (5.0, 1.148_295_591e-3),
+        (10.0, 4.156_968_929e-6),
+    ] {
+        let v = exp_integral_e1(x);
+        assert!((v - e1).abs() < 1e-9 * e1, "E1({x}) = {v}, table {e1}");
+    }
+    let mut worst = 0.0f64;
+    for k in 0..20000 {
+        let x = 0.05 + 5.95 * (k as f64 + 0.37) / 20000.0;
+        let (a, b) = (exp_integral_e1(x), exp_integral_e1_fast(x));
+        worst = worst.max(((a - b) / a).abs());
+    }
+    println!("largest relative error of the fast E1 on [0.05, 6]: {worst:.2e}");
+    assert!(worst < 1e-10, "fast E1 relative error {worst}");
+    for x in [0.001, 0.03, 70.0] {
+        assert_eq!(exp_integral_e1_fast(x), exp_integral_e1(x));
+    }
+}
