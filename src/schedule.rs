@@ -26,10 +26,11 @@ pub enum PhysicsSet {
     LevelSets,
     /// Characteristic functions and density (eq. 19).
     Density,
-    /// Contact forces between bodies (eqs. 20-22).
-    Collision,
-    /// Rigid velocity of each body (eq. 7).
+    /// Rigid velocity of each body from the flow (eq. 7).
     RigidVelocity,
+    /// Contact forces between bodies (eqs. 20-22), added to the rigid velocities as impulses
+    /// (section 3.2).
+    Collision,
     /// Implicit penalization (eqs. 13, 27).
     Penalization,
     /// Baroclinic vorticity generation (eq. 28).
@@ -54,8 +55,8 @@ impl PhysicsSet {
         PhysicsSet::First,
         PhysicsSet::LevelSets,
         PhysicsSet::Density,
-        PhysicsSet::Collision,
         PhysicsSet::RigidVelocity,
+        PhysicsSet::Collision,
         PhysicsSet::Penalization,
         PhysicsSet::Baroclinic,
         PhysicsSet::Transport,
@@ -92,8 +93,12 @@ pub fn step_schedule_with(bodies: bool) -> Schedule {
     if bodies {
         s.add_systems(level_sets::level_sets.in_set(PhysicsSet::LevelSets));
         s.add_systems(density::density.in_set(PhysicsSet::Density));
-        s.add_systems(collision::collision.in_set(PhysicsSet::Collision));
         s.add_systems(rigid_velocity::rigid_velocity.in_set(PhysicsSet::RigidVelocity));
+        s.add_systems(
+            (collision::collision, collision::contact_impulse)
+                .chain()
+                .in_set(PhysicsSet::Collision),
+        );
         s.add_systems(penalization::penalization.in_set(PhysicsSet::Penalization));
         s.add_systems(baroclinic::baroclinic.in_set(PhysicsSet::Baroclinic));
         s.add_systems(rigid_update::rigid_update.in_set(PhysicsSet::RigidUpdate));
@@ -102,7 +107,8 @@ pub fn step_schedule_with(bodies: bool) -> Schedule {
 }
 
 /// The step schedule of vacuum mode (the flow solver off): level sets, contact, motion under
-/// gravity and contact (`free_motion` in the rigid-velocity set), rigid update, diagnostics.
+/// gravity and contact (`free_motion`, in the rigid-update set before `rigid_update`), rigid
+/// update, diagnostics.
 pub fn vacuum_schedule() -> Schedule {
     let mut s = configured(Step);
     for pair in PhysicsSet::ALL.windows(2) {
@@ -110,8 +116,11 @@ pub fn vacuum_schedule() -> Schedule {
     }
     s.add_systems(level_sets::level_sets.in_set(PhysicsSet::LevelSets));
     s.add_systems(collision::collision.in_set(PhysicsSet::Collision));
-    s.add_systems(free_motion::free_motion.in_set(PhysicsSet::RigidVelocity));
-    s.add_systems(rigid_update::rigid_update.in_set(PhysicsSet::RigidUpdate));
+    s.add_systems(
+        (free_motion::free_motion, rigid_update::rigid_update)
+            .chain()
+            .in_set(PhysicsSet::RigidUpdate),
+    );
     s.add_systems(diagnostics::diagnostics.in_set(PhysicsSet::Diagnostics));
     s
 }

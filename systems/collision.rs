@@ -16,8 +16,8 @@
 //! 6% energy). ∇φ_j points into body j, so body i is pushed
 //! away from j along j's normal; distances and normals come from j's reference level set
 //! through its current pose. The force and its moment about i's centroid are summed over the
-//! band; the rigid-velocity system turns them into a velocity change F Δt/m_i and
-//! J_i⁻¹ T Δt (the paper adds the body average of the collision force to ū_i directly, so the
+//! band; `contact_impulse` turns them into a velocity change F Δt/m_i and
+//! J_i⁻¹ T Δt of the rigid velocity the flow gave the body this step (the paper adds the body average of the collision force to ū_i directly, so the
 //! singular force is never differentiated on the grid). An off-centre contact therefore spins
 //! the body.
 //!
@@ -496,6 +496,39 @@ pub fn collision(
         }
     }
     timer.stop(&mut timings, "collision");
+}
+
+/// Contact (section 3.2): the body average of the collision force goes straight into the
+/// rigid velocity the flow has just given the body (`rigid_velocity` runs first), as F Δt/m_i
+/// and (ρ_i J_i)⁻¹ T Δt with the mass and inertia of χ; the penalization then imposes it. The
+/// sub-stepped contact starts from that same velocity, so the impulse it returns is the one
+/// that stops (or turns back) the body as it actually moves this step. (Applied to a velocity
+/// that the flow then replaces, an impulse computed from the previous step's velocity made
+/// a disk hitting a floor alternate up and down from step to step.)
+pub fn contact_impulse(
+    grid: Res<Grid>,
+    time: Res<SimTime>,
+    mut bodies: Query<(&Body, &Material, &ContactState, &mut RigidState)>,
+) {
+    let dt = time.dt;
+    for (body, mat, contact, mut state) in &mut bodies {
+        if !body.is_dynamic()
+            || state.volume <= 0.0
+            || (contact.force == DVec3::ZERO && contact.torque == DVec3::ZERO)
+        {
+            continue;
+        }
+        let m = mat.density * state.volume;
+        state.velocity += dt * contact.force / m;
+        let jc = mat.density * state.inertia;
+        if grid.dim == 2 {
+            if jc.z_axis.z > 0.0 {
+                state.angular_velocity.z += dt * contact.torque.z / jc.z_axis.z;
+            }
+        } else if jc.determinant().abs() > 0.0 {
+            state.angular_velocity += dt * (jc.inverse() * contact.torque);
+        }
+    }
 }
 
 /// The contact force on body i from body j over a step of length `dt`, resolved in time: the

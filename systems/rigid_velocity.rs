@@ -7,11 +7,11 @@
 //! penalization actually applies, w_i = λΔtχ_i/(1 + λΔtχ_i) in place of χ_i, so that the body
 //! that moves is exactly the body the flow is forced to move with, and penalizing towards ū_i
 //! conserves momentum; the volume and inertia reported are those of χ_i. In 2D Ω is about z and J_zz = ∫χ|r|².
-//! The contact force and torque of the collision system are added as F Δt/m_i and
-//! (ρ_i J_i)⁻¹ T Δt (section 3.2). Kinematic bodies take their prescribed motion; static ones stay at rest. Sums are taken per
+//! The collision system, which runs next, adds the contact impulse to these velocities
+//! (section 3.2). Kinematic bodies take their prescribed motion; static ones stay at rest. Sums are taken per
 //! patch row and added in row order (thread-count independent).
 
-use crate::bodies::{Body, ContactState, GridPatch, Material, RigidState, kinematic_velocity};
+use crate::bodies::{Body, GridPatch, RigidState, kinematic_velocity};
 use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
 use crate::grid::Grid;
 use bevy_ecs::prelude::*;
@@ -157,11 +157,11 @@ pub fn rigid_velocity(
     time: Res<SimTime>,
     fields: Res<Fields>,
     mut sums: ResMut<BodySums>,
-    mut bodies: Query<(&Body, &GridPatch, &Material, &ContactState, &mut RigidState)>,
+    mut bodies: Query<(&Body, &GridPatch, &mut RigidState)>,
     mut timings: ResMut<Timings>,
 ) {
     let timer = SystemTimer::start();
-    for (body, patch, mat, contact, mut state) in &mut bodies {
+    for (body, patch, mut state) in &mut bodies {
         if body.is_static() {
             state.velocity = DVec3::ZERO;
             state.angular_velocity = DVec3::ZERO;
@@ -194,21 +194,6 @@ pub fn rigid_velocity(
         } else {
             DVec3::ZERO
         };
-        // Contact (section 3.2): the body average of the collision force goes straight into
-        // ū, F Δt / m and (ρJ)⁻¹ T Δt, with the mass and inertia of χ.
-        if contact.force != DVec3::ZERO || contact.torque != DVec3::ZERO {
-            let dt = time.dt;
-            let m = mat.density * state.volume;
-            state.velocity += dt * contact.force / m;
-            let jc = mat.density * state.inertia;
-            if grid.dim == 2 {
-                if jc.z_axis.z > 0.0 {
-                    state.angular_velocity.z += dt * contact.torque.z / jc.z_axis.z;
-                }
-            } else if jc.determinant().abs() > 0.0 {
-                state.angular_velocity += dt * (jc.inverse() * contact.torque);
-            }
-        }
     }
     timer.stop(&mut timings, "rigid_velocity");
 }

@@ -321,9 +321,26 @@ fn stiff_head_on_contact_in_a_fluid_step_exchanges_the_right_impulse() {
     ));
     // A first step at rest sets the bodies' mass properties.
     s.step().unwrap();
-    let mut q = s.world.query::<(&Body, &mut RigidState)>();
-    for (b, mut st) in q.iter_mut(&mut s.world) {
-        st.velocity = [if b.id == 0 { 1.0 } else { -1.0 }, 0.0, 0.0].into();
+    // The bodies move as the fluid inside them does (the rigid velocity is the mean of the
+    // flow over each body, and contact acts on that): give the fluid in and around each sphere
+    // the velocities ±1.
+    let centres = [0.5 - r - 0.5 * gap, 0.5 + r + 0.5 * gap];
+    let grid = s.world.resource::<tumble::grid::Grid>().clone();
+    {
+        let mut fields = s.world.resource_mut::<tumble::fields::Fields>();
+        for k in 0..grid.n[2] {
+            for j in 0..grid.n[1] {
+                for i in 0..grid.n[0] {
+                    let p = grid.pos(i, j, k);
+                    for (c, v) in centres.iter().zip([1.0, -1.0]) {
+                        let d2 = (p[0] - c).powi(2) + (p[1] - 0.5).powi(2) + (p[2] - 0.5).powi(2);
+                        if d2 < (r + 2.0 * h).powi(2) {
+                            fields.u[0][grid.idx(i, j, k)] = v;
+                        }
+                    }
+                }
+            }
+        }
     }
     s.step().unwrap();
     let mut q = s.world.query::<(
