@@ -34,6 +34,7 @@ pub const CASES: &[&str] = &[
     "ellipsoid-sphere",
     "dkt",
     "tank-vacuum",
+    "tank-pile",
 ];
 
 /// The bundled scenes, by file name (so validation runs from any directory).
@@ -359,6 +360,7 @@ pub fn run_case(case: &str, quick: bool) -> anyhow::Result<Report> {
         "ellipsoid-sphere" => contact::ellipsoid_sphere(quick),
         "dkt" => contact::dkt(quick),
         "tank-vacuum" => contact::tank_vacuum(quick),
+        "tank-pile" => contact::tank_pile(quick),
         _ => anyhow::bail!(
             "unknown validation case `{case}`; the cases are: {}",
             CASES.join(", ")
