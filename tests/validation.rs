@@ -64,7 +64,15 @@ fn ellipsoid_on_sphere_spins_about_three_axes_and_keeps_its_energy() {
 }
 
 #[test]
-fn dkt_spheres_kiss() {
-    // Paper section 4.2.2 at h = 1/60 up to t = 0.42: drafting and kissing (about a minute).
+fn dkt_spheres_draft_kiss_and_tumble() {
+    // Paper section 4.2.2, full case (h = 1/60 to t = 0.7, about 30 s): drafting, kissing and
+    // tumbling.
     check("dkt");
+}
+
+#[test]
+fn tank_bottom_layer_settles_on_the_floor_in_fluid() {
+    // The bottom layer (36 spheres) of `tank-200` settles onto the floor through the fluid to
+    // t = 1.5 (about 15 s): at rest, touching, never overlapping by more than ε/2.
+    check("tank-pile");
 }
