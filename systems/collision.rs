@@ -16,10 +16,10 @@
 //! 6% energy). ∇φ_j points into body j, so body i is pushed
 //! away from j along j's normal; distances and normals come from j's reference level set
 //! through its current pose. The force and its moment about i's centroid are summed over the
-//! band; `contact_impulse` turns them into a velocity change F Δt/m_i and
-//! J_i⁻¹ T Δt of the rigid velocity the flow gave the body this step (the paper adds the body average of the collision force to ū_i directly, so the
-//! singular force is never differentiated on the grid). An off-centre contact therefore spins
-//! the body.
+//! band; `contact_impulse` turns them into a velocity change F Δt/m_i and J_i⁻¹ T Δt of the
+//! rigid velocity the flow gave the body this step (the paper adds the body average of the
+//! collision force to ū_i directly, so the singular force is never differentiated on the
+//! grid). An off-centre contact therefore spins the body.
 //!
 //! ρ_i is the body's own density, so κ is an acceleration scale independent of the material.
 //! d is clamped below at ε/20 (overlap cannot make the force infinite) and the force is
