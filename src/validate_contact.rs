@@ -40,6 +40,27 @@ fn leapfrog_mid(prev: &RigidState, s: &RigidState) -> RigidState {
     }
 }
 
+/// The smallest gap among spheres of radius `r` (pairwise) and between them and the walls of
+/// the box [lo, hi]³ (negative: an overlap).
+fn smallest_sphere_gap<'a>(
+    states: impl Iterator<Item = &'a RigidState> + Clone,
+    r: f64,
+    lo: f64,
+    hi: f64,
+) -> f64 {
+    let mut worst = f64::INFINITY;
+    for (a, sa) in states.clone().enumerate() {
+        for ax in 0..3 {
+            let c = sa.center[ax];
+            worst = worst.min((c - lo - r).min(hi - c - r));
+        }
+        for sb in states.clone().skip(a + 1) {
+            worst = worst.min((sb.center - sa.center).length() - 2.0 * r);
+        }
+    }
+    worst
+}
+
 /// The relative change of the total energy against t, with the exact value 0 (the cases allow
 /// 5%; the tolerance is not drawn, it would flatten the curve).
 fn energy_plot(echange: Vec<(f64, f64)>) -> PlotSpec {
@@ -336,15 +357,7 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
             dev = dev.max(((e - e0) / e0).abs());
             echange.push((sim.time(), (e - e0) / e0));
         }
-        for (a, (_, sa, _, _)) in st.iter().enumerate() {
-            for ax in 0..3 {
-                let c = sa.center[ax];
-                worst = worst.min((c - lo - r).min(hi - c - r));
-            }
-            for (_, sb, _, _) in &st[a + 1..] {
-                worst = worst.min((sb.center - sa.center).length() - 2.0 * r);
-            }
-        }
+        worst = worst.min(smallest_sphere_gap(st.iter().map(|e| &e.1), r, lo, hi));
         prev = Some(st.into_iter().map(|e| e.1).collect());
     }
     rep.rows.push(Row::abs(
@@ -401,19 +414,9 @@ pub fn tank_pile(quick: bool) -> anyhow::Result<Report> {
     while sim.time() < end * (1.0 - 1e-12) {
         sim.step()?;
         let st = dynamic_states(&mut sim);
-        let mut vmax = 0.0f64;
-        let mut top = f64::NEG_INFINITY;
-        for (a, (_, sa, _, _)) in st.iter().enumerate() {
-            vmax = vmax.max(sa.velocity.length());
-            top = top.max(sa.center.z + r);
-            for ax in 0..3 {
-                let c = sa.center[ax];
-                worst = worst.min((c - lo - r).min(hi - c - r));
-            }
-            for (_, sb, _, _) in &st[a + 1..] {
-                worst = worst.min((sb.center - sa.center).length() - 2.0 * r);
-            }
-        }
+        worst = worst.min(smallest_sphere_gap(st.iter().map(|e| &e.1), r, lo, hi));
+        let vmax = st.iter().map(|e| e.1.velocity.length()).fold(0.0, f64::max);
+        let top = st.iter().map(|e| e.1.center.z + r).fold(lo, f64::max);
         vmax_curve.push((sim.time(), vmax / u_stokes));
         top_curve.push((sim.time(), top));
         last = st.into_iter().map(|e| e.1).collect();

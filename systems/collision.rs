@@ -520,14 +520,22 @@ pub fn contact_impulse(
         }
         let m = mat.density * state.volume;
         state.velocity += dt * contact.force / m;
-        let jc = mat.density * state.inertia;
-        if grid.dim == 2 {
-            if jc.z_axis.z > 0.0 {
-                state.angular_velocity.z += dt * contact.torque.z / jc.z_axis.z;
-            }
-        } else if jc.determinant().abs() > 0.0 {
-            state.angular_velocity += dt * (jc.inverse() * contact.torque);
-        }
+        let jinv = inverse_inertia(grid.dim, mat.density, &state);
+        state.angular_velocity += dt * (jinv * contact.torque);
+    }
+}
+
+/// (ρJ)⁻¹ of a body of density `rho` in state `s` (J from χ): in 2D only the rotation about z
+/// (the x and y rows are zero); zero where J is singular (an empty body).
+fn inverse_inertia(dim: usize, rho: f64, s: &RigidState) -> glam::DMat3 {
+    let jw = rho * s.inertia;
+    if dim == 2 {
+        let jz = jw.z_axis.z;
+        glam::DMat3::from_diagonal(DVec3::new(0.0, 0.0, if jz > 0.0 { 1.0 / jz } else { 0.0 }))
+    } else if jw.determinant().abs() > 0.0 {
+        jw.inverse()
+    } else {
+        glam::DMat3::ZERO
     }
 }
 
@@ -564,17 +572,7 @@ fn substepped(
     if n == 1 && !first.any {
         return first;
     }
-    let jinv = {
-        let jw = rho_i * si.inertia;
-        if grid.dim == 2 {
-            let jz = jw.z_axis.z;
-            glam::DMat3::from_diagonal(DVec3::new(0.0, 0.0, if jz > 0.0 { 1.0 / jz } else { 0.0 }))
-        } else if jw.determinant().abs() > 0.0 {
-            jw.inverse()
-        } else {
-            glam::DMat3::ZERO
-        }
-    };
+    let jinv = inverse_inertia(grid.dim, rho_i, si);
     let tau = dt / n as f64;
     let mut s = *si;
     let mut force = DVec3::ZERO;
@@ -648,18 +646,10 @@ fn substepped_pair(
     if n == 1 && !first.any {
         return first;
     }
-    let inverse = |rho: f64, s: &RigidState| {
-        let jw = rho * s.inertia;
-        if grid.dim == 2 {
-            let jz = jw.z_axis.z;
-            glam::DMat3::from_diagonal(DVec3::new(0.0, 0.0, if jz > 0.0 { 1.0 / jz } else { 0.0 }))
-        } else if jw.determinant().abs() > 0.0 {
-            jw.inverse()
-        } else {
-            glam::DMat3::ZERO
-        }
-    };
-    let (ji, jj) = (inverse(rho_i, si), inverse(rho_j, sj));
+    let (ji, jj) = (
+        inverse_inertia(grid.dim, rho_i, si),
+        inverse_inertia(grid.dim, rho_j, sj),
+    );
     let tau = dt / n as f64;
     let (mut a, mut b) = (*si, *sj);
     let (mut f, mut t_a, mut t_b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
