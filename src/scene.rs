@@ -224,9 +224,13 @@ pub enum TimeStep {
         cfl: f64,
         /// With bodies: upper bound on the diffusion number ν Δt / h² (dimensionless). The
         /// penalization enforces no-slip once per step, and implicit diffusion carries
-        /// vorticity across the body's surface by about √(ν Δt)/h cells per step in between;
-        /// beyond ~0.5 the drag is underestimated (a settling sphere at ν = 0.1, h = 1/64 falls
-        /// 10% faster than the paper's value at ν Δt/h² = 2, and is within 4% of it at 0.5).
+        /// vorticity across the body's surface by about √(ν Δt)/h cells per step in between.
+        /// That softens the no-slip surface by a fraction of a cell growing like √(ν Δt)/h,
+        /// which offsets part of the O(h) thickening of the rigid region, so at a given h the
+        /// drag on a body depends on this bound and is not converged in Δt. Measured on a
+        /// settling sphere (d = 0.2, ν = 0.1, h = 1/48, U at t = 1.2): U = 0.2383 at 0.5,
+        /// 0.2253 at 0.25, 0.2158 at 0.125 (about √(ν Δt) behaviour; the paper has 0.256 at
+        /// h = 1/64); at 2 (h = 1/64) the sphere fell about 10% faster than at 0.5.
         /// Default: 0.5.
         #[serde(default = "default_diffusion_number")]
         diffusion_number: f64,
