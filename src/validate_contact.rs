@@ -61,6 +61,27 @@ fn smallest_sphere_gap<'a>(
     worst
 }
 
+/// The geometry of a `tank-200` scene, read from the scene itself: the walls of the cubic box
+/// (the first body, the outside of a centred box) as [lo, hi] on every axis, and the radius of
+/// the spheres (the second body).
+fn tank_geometry(scene: &crate::scene::Scene) -> anyhow::Result<(f64, f64, f64)> {
+    use crate::shapes::Shape;
+    let (Some(tank), Some(sphere)) = (scene.bodies.first(), scene.bodies.get(1)) else {
+        anyhow::bail!("the tank scene needs the box and at least one sphere");
+    };
+    let Shape::Complement(inner) = &tank.shape else {
+        anyhow::bail!("the tank scene's first body must be the outside of a box");
+    };
+    let Shape::Box { half_extents } = **inner else {
+        anyhow::bail!("the tank scene's first body must be the outside of a box");
+    };
+    let Shape::Sphere { radius } = sphere.shape else {
+        anyhow::bail!("the tank scene's second body must be a sphere");
+    };
+    let c = tank.position.first().copied().unwrap_or(0.0);
+    Ok((c - half_extents[0], c + half_extents[0], radius))
+}
+
 /// The relative change of the total energy against t, with the exact value 0 (the cases allow
 /// 5%; the tolerance is not drawn, it would flatten the curve).
 fn energy_plot(echange: Vec<(f64, f64)>) -> PlotSpec {
@@ -219,12 +240,11 @@ pub fn ellipsoid_sphere(quick: bool) -> anyhow::Result<Report> {
 }
 
 /// Paper section 4.2.2: drafting, kissing and tumbling of two spheres.
-pub fn dkt(quick: bool) -> anyhow::Result<Report> {
+pub fn dkt(_quick: bool) -> anyhow::Result<Report> {
     let mut rep = Report::new("dkt");
     let scene = bundled_scene("dkt.ron")?;
     // The whole case takes about 30 s on two cores, so `quick` runs it unchanged (at
     // h = 1/30 the spheres would be 2.5 cells in radius, too coarse to test anything).
-    let _ = quick;
     let h = scene.grid().h;
     let r = 0.083;
     let end = 0.7;
@@ -333,8 +353,7 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
     let g = DVec3::from_array(scene.gravity());
     let h = scene.grid().h;
     let eps = scene.contact.eps.unwrap_or(h);
-    let (lo, hi) = (0.5 - 0.46875, 0.5 + 0.46875);
-    let r = 0.05;
+    let (lo, hi, r) = tank_geometry(&scene)?;
     let n = scene.bodies.len() - 1;
     let end = scene.numerics.end_time;
     let mut sim = Simulation::new(scene)?;
@@ -398,8 +417,7 @@ pub fn tank_pile(quick: bool) -> anyhow::Result<Report> {
     let touch = scene.contact.range * eps;
     let nu = scene.fluid.viscosity;
     let rho_f = scene.fluid.density;
-    let (lo, hi) = (0.5 - 0.46875, 0.5 + 0.46875);
-    let r = 0.05;
+    let (lo, hi, r) = tank_geometry(&scene)?;
     let rho_s = scene.bodies[1].density.unwrap_or(rho_f);
     // Stokes settling velocity of one sphere in unbounded fluid.
     let u_stokes = 2.0 / 9.0 * (rho_s / rho_f - 1.0) * g * r * r / nu;
