@@ -94,6 +94,8 @@ pub struct Params {
     pub interface_cells: f64,
     /// Offset of the penalization mask into the body, in cells.
     pub penalization_offset: f64,
+    /// How gravity and a dynamic body's inertia reach the body.
+    pub body_coupling: crate::scene::BodyCoupling,
     /// Boussinesq form of the baroclinic term.
     pub boussinesq: bool,
     /// Du/Dt on the interfaces in the baroclinic term.
@@ -157,6 +159,7 @@ impl Params {
             lambda: scene.numerics.lambda,
             interface_cells: scene.numerics.interface_cells,
             penalization_offset: scene.numerics.penalization_offset,
+            body_coupling: scene.numerics.body_coupling,
             boussinesq: scene.numerics.boussinesq,
             interface_acceleration: scene.numerics.interface_acceleration,
             has_bodies: !scene.bodies.is_empty(),

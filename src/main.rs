@@ -189,6 +189,9 @@ fn main() -> ExitCode {
             };
             let g = scene.grid();
             println!("scene `{}` is valid", scene.name);
+            for w in scene.warnings() {
+                println!("  warning: {w}");
+            }
             println!(
                 "  {}D periodic box, origin {:?}, extent {:?}",
                 g.dim,

@@ -166,6 +166,12 @@ fn start_run(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<Ru
         dir.display()
     );
     tracing::info!("{}", crate::runlog::scene_summary(&scene));
+    for w in scene.warnings() {
+        tracing::warn!("{w}");
+        if !opts.quiet {
+            eprintln!("warning: {w}");
+        }
+    }
     atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
         .context("cannot write scene.ron")?;
     let end = scene.numerics.end_time;

@@ -1,7 +1,9 @@
 //! # baroclinic: vorticity made by density gradients (paper eq. 28; Boussinesq form eq. 18)
 //!
-//! ∂ω/∂t = -(∇ρ/ρ) × (∂u/∂t + (u·∇)u - g), integrated over one step: this is how gravity
-//! reaches a body whose density differs from the fluid's. ∂u/∂t comes from the last two
+//! ∂ω/∂t = -(∇ρ/ρ) × (∂u/∂t + (u·∇)u - g), integrated over one step: with
+//! `numerics.body_coupling: Baroclinic` (the default) this is how gravity reaches a body whose
+//! density differs from the fluid's. With `Momentum` a body's weight and inertia act on its
+//! rigid velocity instead (`rigid_velocity`), and the nodes of bodies are skipped here. ∂u/∂t comes from the last two
 //! velocity fields, (u^n - u^{n-1})/Δt_{n-1} (zero on the first step), and ∇ρ and (u·∇)u from
 //! centred differences; only nodes where ρ varies are touched. With `numerics.boussinesq` the
 //! term is ∇ρ × g / ρ_F instead.
@@ -20,7 +22,7 @@ use crate::bodies::{
 };
 use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
 use crate::grid::Grid;
-use crate::scene::InterfaceAcceleration;
+use crate::scene::{BodyCoupling, InterfaceAcceleration};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -38,6 +40,7 @@ pub fn baroclinic(
     let timer = SystemTimer::start();
     let dt = time.dt;
     let rigid = params.interface_acceleration == InterfaceAcceleration::Rigid;
+    let momentum = params.body_coupling == BodyCoupling::Momentum;
     let inv_dt_body = if fields.dt_prev > 0.0 {
         1.0 / fields.dt_prev
     } else {
@@ -104,6 +107,10 @@ pub fn baroclinic(
                     },
                 )
             };
+            // With the momentum coupling the bodies' weight acts on their rigid velocity.
+            if momentum && owner[c] != NO_BODY {
+                continue;
+            }
             let grho = grad(rho);
             if grho == DVec3::ZERO {
                 continue;

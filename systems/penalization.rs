@@ -9,7 +9,9 @@
 //! Moving bodies are penalized first and static ones last, so where a body overlaps a wall the
 //! wall's rest state wins.
 //!
-//! The hydrodynamic force on body i is the momentum the penalization takes out of the flow per
+//! The hydrodynamic force on a static or kinematic body i (and on a dynamic one with
+//! `body_coupling: Baroclinic`; with `Momentum` `rigid_velocity` reports it) is the momentum
+//! the penalization takes out of the flow per
 //! unit time, F_i = ∫ ρ χ_i (u_old - u_new)/Δt dx = λ ∫ ρ χ_i (u_new - ū_i) dx, and the torque
 //! its moment about the centroid. The Δt there is the previous step's, the one over which the
 //! flow built up the slip that the penalization removes.
@@ -28,6 +30,7 @@
 use crate::bodies::{Body, BodyFields, GridPatch, Hydro, RigidState};
 use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
 use crate::grid::{Grid, component_ptrs};
+use crate::scene::BodyCoupling;
 use crate::systems::rigid_velocity::BodySums;
 use bevy_ecs::prelude::*;
 use glam::DVec3;
@@ -62,6 +65,7 @@ pub fn penalization(
         dt
     };
     let mask = params.penalization_mask(grid.h);
+    let momentum = params.body_coupling == BodyCoupling::Momentum;
     let fields = &mut *fields;
     // Moving bodies first, static ones last: where a body overlaps a wall, the wall wins and
     // the fluid there is at rest, which is what stops a body at a wall.
@@ -70,13 +74,18 @@ pub fn penalization(
             if body.is_static() != pass_static {
                 continue;
             }
+            let dynamic = body.is_dynamic();
+            // With the momentum coupling a dynamic body's force is the fluid's share of its
+            // momentum balance, reported by `rigid_velocity`.
+            let own_force = !(dynamic && momentum);
             let [dx, dy, _] = patch.dims;
             if patch.is_empty() {
-                *hydro = Hydro::default();
+                if own_force {
+                    *hydro = Hydro::default();
+                }
                 continue;
             }
             let rows = patch.len() / dx;
-            let dynamic = body.is_dynamic();
             let u = component_ptrs(&mut fields.u);
             let du = component_ptrs(&mut bf.du);
             let rho = &bf.rho;
@@ -120,13 +129,15 @@ pub fn penalization(
                     acc[..3].copy_from_slice(&f.to_array());
                     acc[3..6].copy_from_slice(&m.to_array());
                 });
-            let mut force = DVec3::ZERO;
-            let mut torque = DVec3::ZERO;
-            for s in &sums.rows_mut()[..rows] {
-                force += DVec3::new(s[0], s[1], s[2]);
-                torque += DVec3::new(s[3], s[4], s[5]);
+            if own_force {
+                let mut force = DVec3::ZERO;
+                let mut torque = DVec3::ZERO;
+                for s in &sums.rows_mut()[..rows] {
+                    force += DVec3::new(s[0], s[1], s[2]);
+                    torque += DVec3::new(s[3], s[4], s[5]);
+                }
+                *hydro = Hydro { force, torque };
             }
-            *hydro = Hydro { force, torque };
         }
     }
     curl_add(&grid, &bf.du, fields.omega_mut());

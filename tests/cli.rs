@@ -214,6 +214,37 @@ fn validate_writes_the_plots_to_the_plots_dir() {
 }
 
 #[test]
+fn check_warns_of_a_dense_body_with_the_baroclinic_coupling() {
+    let d = tmp("dense");
+    let scene = |coupling: &str| {
+        format!(
+            r#"Scene(
+    domain: (extent: [1.0, 1.0], cells: [32, 32]),
+    fluid: (gravity: [0.0, -1.0]),
+    numerics: (body_coupling: {coupling}),
+    bodies: [(name: "steel", shape: Disk(radius: 0.1), density: 7.8, position: [0.5, 0.5])],
+)"#
+        )
+    };
+    for (coupling, warned) in [("Baroclinic", true), ("Momentum", false)] {
+        let file = d.join(format!("{coupling}.ron"));
+        std::fs::write(&file, scene(coupling)).unwrap();
+        let st = tumble()
+            .args(["check", file.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(st.status.success());
+        let out = String::from_utf8_lossy(&st.stdout);
+        assert_eq!(
+            out.contains("warning: body `steel` is 7.800 times as dense"),
+            warned,
+            "{out}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
 fn check_rejects_a_missing_mesh_with_status_2() {
     let d = tmp("mesh");
     let scene = d.join("m.ron");

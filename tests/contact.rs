@@ -321,9 +321,8 @@ fn stiff_head_on_contact_in_a_fluid_step_exchanges_the_right_impulse() {
     ));
     // A first step at rest sets the bodies' mass properties.
     s.step().unwrap();
-    // The bodies move as the fluid inside them does (the rigid velocity is the mean of the
-    // flow over each body, and contact acts on that): give the fluid in and around each sphere
-    // the velocities ±1.
+    // Give each sphere and the fluid in and around it the velocities ±1 (the body's rigid
+    // velocity is its momentum balance with the flow inside it, and contact acts on that).
     let centres = [0.5 - r - 0.5 * gap, 0.5 + r + 0.5 * gap];
     let grid = s.world.resource::<tumble::grid::Grid>().clone();
     {
@@ -340,6 +339,12 @@ fn stiff_head_on_contact_in_a_fluid_step_exchanges_the_right_impulse() {
                     }
                 }
             }
+        }
+    }
+    {
+        let mut q = s.world.query::<(&Body, &mut RigidState)>();
+        for (b, mut st) in q.iter_mut(&mut s.world) {
+            st.velocity = glam::DVec3::new(if b.id == 0 { 1.0 } else { -1.0 }, 0.0, 0.0);
         }
     }
     s.step().unwrap();
