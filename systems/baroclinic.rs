@@ -3,10 +3,10 @@
 //! ∂ω/∂t = -(∇ρ/ρ) × (∂u/∂t + (u·∇)u - g), integrated over one step: with
 //! `numerics.body_coupling: Baroclinic` (the default) this is how gravity reaches a body whose
 //! density differs from the fluid's. With `Momentum` a body's weight and inertia act on its
-//! rigid velocity instead (`rigid_velocity`), and the nodes of bodies are skipped here. ∂u/∂t comes from the last two
-//! velocity fields, (u^n - u^{n-1})/Δt_{n-1} (zero on the first step), and ∇ρ and (u·∇)u from
-//! centred differences; only nodes where ρ varies are touched. With `numerics.boussinesq` the
-//! term is ∇ρ × g / ρ_F instead.
+//! rigid velocity instead (`rigid_velocity`), and the nodes of bodies are skipped here.
+//! ∂u/∂t comes from the last two velocity fields, (u^n - u^{n-1})/Δt_{n-1} (zero on the first
+//! step), and ∇ρ and (u·∇)u from centred differences; only nodes where ρ varies are touched.
+//! With `numerics.boussinesq` the term is ∇ρ × g / ρ_F instead.
 //!
 //! ∇ρ lives on the bodies' interfaces, where the fluid moves with the body (no slip), so there
 //! Du/Dt is the body's rigid acceleration A + α × r + Ω × (Ω × r), with A and α from this

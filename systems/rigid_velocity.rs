@@ -14,14 +14,19 @@
 //! w-region, of fluid mass M_w = ρ_F ∫w and inertia J_w = ρ_F ∫w (|r|² I - r rᵀ). The body's
 //! mass beyond the fluid's, (ρ_i - ρ_F) χ, and its buoyancy enter here:
 //!   (M_w + (ρ_i - ρ_F) |S_i|) (V^{n+1} - V^n) = M_w (ũ - V^n) + (ρ_i - ρ_F) |S_i| g Δt,
-//!   (J_w + (ρ_i - ρ_F) J_i) (Ω^{n+1} - Ω^n) = J_w (Ω̃ - Ω^n),
-//! with V^n, Ω^n the velocities the body was given last step and Δt that step's length: the
+//!   (J_w + (ρ_i - ρ_F) J_i) Ω^{n+1} = J_w Ω̃ + (ρ_i - ρ_F) J_i^n Ω^n,
+//! with V^n, Ω^n the velocities the body was given last step, J_i^n its inertia then (so the
+//! excess mass keeps its angular momentum as the body turns) and Δt that step's length: the
 //! momentum balance of the rigid region with its weight, the fluid's force and its whole
 //! inertia, implicit in the body's own mass. (With ρ_F |S_i| in place of M_w, the fluid in the
 //! outer half of the band, moved rigidly but not counted, made a settling sphere fall 91% too
 //! fast.) The hydrodynamic force and torque reported are the fluid's, M_w (ũ - V^n)/Δt and
 //! J_w (Ω̃ - Ω^n)/Δt. With `Baroclinic` (the default) V and Ω are ũ and Ω̃, and gravity comes
 //! through the baroclinic term.
+//!
+//! On the first step a dynamic body keeps the velocity and angular velocity the scene gives it
+//! (the flow inside it is whatever the initial vorticity makes), and the penalization imposes
+//! them on the flow; from then on they follow from the flow as above.
 //!
 //! The collision system, which runs next, adds the contact impulse to these velocities
 //! (section 3.2). Kinematic bodies take their prescribed motion; static ones stay at rest. Sums are taken per
@@ -186,7 +191,7 @@ pub fn rigid_velocity(
             state.angular_velocity = DVec3::ZERO;
             continue;
         }
-        let (v_prev, w_prev) = (state.velocity, state.angular_velocity);
+        let (v_prev, w_prev, j_prev) = (state.velocity, state.angular_velocity, state.inertia);
         if !mass_properties(&grid, patch, &fields.u, &mut sums, body, time.t, &mut state) {
             continue;
         }
@@ -207,6 +212,13 @@ pub fn rigid_velocity(
         let (vol, j) = (wvol, wj);
         let v_flow = mom / vol;
         let w_flow = solve_inertia(grid.dim, j, ang);
+        // Before the first step the body has the velocities the scene gives it (the flow
+        // inside it does not know them yet): the first penalization imposes them.
+        let first = fields.dt_prev <= 0.0;
+        if first {
+            *hydro = Hydro::default();
+            continue;
+        }
         if !momentum {
             state.velocity = v_flow;
             state.angular_velocity = w_flow;
@@ -215,7 +227,7 @@ pub fn rigid_velocity(
         // The region the penalization moves rigidly is the w-region (volume `wvol`, inertia
         // `wj`), which the flow carries as fluid of density ρ_F; the body's mass beyond the
         // fluid's, (ρ_i - ρ_F) χ, is added to it. The flow's momentum change of the region over
-        // the step it has just made (none before the first step) is the fluid's force.
+        // the step it has just made is the fluid's force.
         let dt = fields.dt_prev;
         let rho_f = params.rho_fluid;
         let excess = mat.density - rho_f;
@@ -223,17 +235,20 @@ pub fn rigid_velocity(
         let m = m_w + excess * state.volume;
         let p_fluid = m_w * (v_flow - v_prev);
         state.velocity = v_prev + (p_fluid + excess * state.volume * dt * g) / m;
+        // Angular momentum: the fluid part's is the flow's now, the excess mass keeps its own
+        // (J_i as it was, so that a tumbling body's excess part keeps J_i Ω exactly).
         let j_w = rho_f * wj;
-        let l_fluid = j_w * (w_flow - w_prev);
-        let j_body = j_w + excess * state.inertia;
-        state.angular_velocity = w_prev + solve_inertia(grid.dim, j_body, l_fluid);
-        *hydro = if dt > 0.0 {
-            Hydro {
-                force: p_fluid / dt,
-                torque: l_fluid / dt,
-            }
+        let l_fluid = rho_f * ang - j_w * w_prev;
+        let j_old = if j_prev == DMat3::ZERO {
+            state.inertia
         } else {
-            Hydro::default()
+            j_prev
+        };
+        let l_body = rho_f * ang + excess * (j_old * w_prev);
+        state.angular_velocity = solve_inertia(grid.dim, j_w + excess * state.inertia, l_body);
+        *hydro = Hydro {
+            force: p_fluid / dt,
+            torque: l_fluid / dt,
         };
     }
     timer.stop(&mut timings, "rigid_velocity");
