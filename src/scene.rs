@@ -324,7 +324,8 @@ pub struct Numerics {
 /// - `Baroclinic` with `Rigid` (its default): -8% at ρ_i = 1.1, +13% at 2, and it blows up at
 ///   5 (the excess inertia is explicit, lagged by a step); `boussinesq: true`: -10.5% at 1.1,
 ///   2 and 5 alike, but with the fluid's inertia for the body;
-/// - `Momentum`: +0.8% to +1.3% for every density from 0.01 to 20 (+1.7% at h = 1/48), the
+/// - `Momentum`: within 1.3% for every density from 0.01 to 20 (-0.8% at 20, +0.9% at 2,
+///   +1.3% at 0.01; +1.7% at 2 and h = 1/48; `tumble validate stokes-settling`), the
 ///   excess inertia implicit in the body's own update; stable down to ρ_i = 0.1 ρ_F at
 ///   h = 1/64 (0.01 ρ_F blew up there).
 ///

@@ -40,6 +40,12 @@ fn unknown_case_is_an_error() {
 }
 
 #[test]
+fn stokes_settling_in_a_periodic_box_against_hasimoto() {
+    // body_coupling: Momentum at h = 1/32, densities 1.1, 2 and 5 (about 20 s).
+    check("stokes-settling");
+}
+
+#[test]
 fn sphere_settling_terminal_velocity_at_h_1_64() {
     // Paper Table 1, d = 0.3, ν = 0.02 at h = 1/64 (about a minute).
     check("sphere-settling");
