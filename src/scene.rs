@@ -536,7 +536,8 @@ impl Scene {
     /// Things in a valid scene that are likely to go wrong, one sentence each: dynamic bodies
     /// heavier than 2.5 ρ_F with the default `Baroclinic` coupling (its excess inertia is
     /// explicit: a sphere of density 3 in a periodic box settled 35% too fast, one of 4 blew
-    /// up; `Momentum` is right at 0.01 to 20).
+    /// up, a disk of density 3 launched in still fluid oscillated with a growing amplitude;
+    /// `Momentum` is right at 0.01 to 20).
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
         let n = &self.numerics;
@@ -547,7 +548,7 @@ impl Scene {
             let rho = b.density.unwrap_or(self.fluid.density);
             if matches!(b.kind, BodyKind::Dynamic) && rho > 2.5 * self.fluid.density {
                 out.push(format!(
-                    "body `{}` is {:.3} times as dense as the fluid: with `body_coupling: Baroclinic` (the default) dense bodies settle too fast (a sphere at Re << 1: +13% at 2 times, +35% at 3) and from about 4 times the run blows up; `numerics: (body_coupling: Momentum)` does not",
+                    "body `{}` is {:.3} times as dense as the fluid: with `body_coupling: Baroclinic` (the default) dense bodies move wrongly (a sphere settling at Re << 1: +13% at 2 times, +35% at 3, blown up at 4; a disk launched at 3 times oscillates with a growing amplitude); `numerics: (body_coupling: Momentum)` does not",
                     b.name,
                     rho / self.fluid.density
                 ));
