@@ -303,67 +303,6 @@ fn dense_disk_start_converges_to_the_added_mass_acceleration() {
     );
 }
 
-/// Terminal velocity (downwards) at t = 0.3 of a sphere (radius 0.1) of density `rho` settling
-/// under g = 1 in a periodic unit box of fluid (ρ_F = 1, ν = 1) at h = 1/32.
-fn periodic_stokes_settling(rho: f64, coupling: &str) -> f64 {
-    let mut s = sim(&format!(
-        r#"Scene(
-        domain: (extent: [1.0, 1.0, 1.0], cells: [32, 32, 32]),
-        fluid: (viscosity: 1.0, gravity: [0.0, 0.0, -1.0]),
-        numerics: (end_time: 0.3, body_coupling: {coupling}),
-        bodies: [(name: "sphere", shape: Sphere(radius: 0.1), density: {rho},
-                  position: [0.5, 0.5, 0.5])],
-    )"#
-    ));
-    s.set_stop_at(Some(0.3));
-    // Stop one step short of the (shortened) landing step: the steady state is reached long
-    // before (the slowest periodic mode decays like exp(-4π²νt/L²), e^-12 by t = 0.3).
-    while s.time() < 0.29 {
-        s.step().unwrap();
-    }
-    -states(&mut s)[0].1.velocity.z
-}
-
-#[test]
-fn stokes_settling_in_a_periodic_box_matches_hasimoto_for_any_density() {
-    // A simple cubic array of spheres settling at Re ≪ 1 (Re = U a/ν ≈ 2e-4): Hasimoto (1959)
-    // and Sangani & Acrivos (1982) give U/U_s = 1 - 1.7601 c^(1/3) + c - 1.5593 c² + O(c^(8/3))
-    // with the volume fraction c = 4πa³/3L³ and U_s = 2 (ρ_s - ρ_F) g a² / (9 μ). The steady
-    // velocity depends on the density only through ρ_s - ρ_F. The sphere has 3.2 cells per
-    // radius, so 5% (at the default time step: the drag at a given h depends on the
-    // diffusion number, see `TimeStep::Adaptive::diffusion_number`); whether the zero-mean
-    // velocity is the fluid's or the mixture's changes U by O(c) = 0.4%.
-    let (a, g, mu) = (0.1, 1.0, 1.0);
-    let c = 4.0 * PI * a * a * a / 3.0;
-    let hasimoto = 1.0 - 1.7601 * c.cbrt() + c - 1.5593 * c * c;
-    let mut ratios = Vec::new();
-    for rho in [0.5, 1.1, 2.0, 5.0] {
-        let u_s = 2.0 * (rho - 1.0) * g * a * a / (9.0 * mu);
-        let u = periodic_stokes_settling(rho, "Momentum");
-        ratios.push(u / (u_s * hasimoto));
-    }
-    eprintln!("U / U_Hasimoto for densities 0.5, 1.1, 2, 5: {ratios:?}");
-    for r in &ratios {
-        assert!((r - 1.0).abs() < 0.05, "U / U_Hasimoto = {ratios:?}");
-    }
-    let (lo, hi) = ratios
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(l, h), &r| (l.min(r), h.max(r)));
-    assert!(
-        hi / lo - 1.0 < 0.01,
-        "the steady velocity must not depend on the density ratio: {ratios:?}"
-    );
-    // The paper's form (the baroclinic term divided by ρ, with one ν = μ/ρ_F) gives the body
-    // the buoyancy ρ_F ln(ρ_s/ρ_F) V g instead: at ρ_s = 2, U is ln 2 = 0.693 of the above.
-    let paper = periodic_stokes_settling(2.0, "Baroclinic, interface_acceleration: Eulerian");
-    let u2 = ratios[2] * 2.0 * g * a * a / (9.0 * mu) * hasimoto;
-    assert!(
-        (paper / u2 - 2f64.ln()).abs() < 0.02,
-        "Eulerian baroclinic: U = {paper}, {} of the momentum coupling's",
-        paper / u2
-    );
-}
-
 #[test]
 fn a_dense_disk_launched_in_still_fluid_shares_its_momentum_with_the_added_mass() {
     // A disk launched at V0 = 1 in still fluid keeps V0 for the first step (the scene's

@@ -41,7 +41,8 @@ fn unknown_case_is_an_error() {
 
 #[test]
 fn stokes_settling_in_a_periodic_box_against_hasimoto() {
-    // body_coupling: Momentum at h = 1/32, densities 1.1, 2 and 5 (about 20 s).
+    // body_coupling: Momentum at h = 1/32, densities 0.5, 1.1, 2 and 5, and the paper's
+    // Eulerian form at ln 2 of it (about 20 s).
     check("stokes-settling");
 }
 
