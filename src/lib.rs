@@ -2,33 +2,28 @@
 //! vortex level set method of Coquerelle & Cottet (J. Comput. Phys. 227, 2008).
 //!
 //! The engine is a `bevy_ecs` world: dense grids are resources, the physics steps are systems
-//! in one explicit schedule ([`schedule`]), one file per system in `systems/`.
+//! in one explicit schedule ([`sim::schedule`]), one file per system in `systems/`.
+//!
+//! The modules are layers; each uses only the ones above it in this list (a test checks it):
+//! - [`base`]: grid, fields, kernels, typed parameters;
+//! - [`solvers`]: the FFT engine and spectral operators;
+//! - [`bodies`]: shapes, level sets, body components, the contact kernel;
+//! - [`systems`]: the physics systems (one file each, in `systems/`);
+//! - [`scene`]: the RON scene format and its validation;
+//! - [`sim`]: the world built from a validated scene, the schedule, the engine;
+//! - [`io`]: snapshots, checkpoints, log, plots;
+//! - [`run`] and [`validate`]: the run driver and the validation cases (the CLI sits on top).
 
 // Numerical kernels index several arrays with one loop variable; iterators would obscure them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod base;
 pub mod bodies;
-pub mod checkpoint;
-pub mod engine;
-pub mod fields;
-pub mod grid;
-#[cfg(feature = "hdf5")]
-pub mod hdf5_out;
-pub mod init;
-pub mod kernels;
-pub mod levelset;
-pub mod output;
-pub mod overlap;
-pub mod plot;
+pub mod io;
 pub mod run;
-pub mod runlog;
 pub mod scene;
-pub mod schedule;
-pub mod shapes;
-pub mod snapshots;
-pub mod spectral;
-pub mod validate;
-pub mod xdmf;
-
+pub mod sim;
+pub mod solvers;
 #[path = "../systems/mod.rs"]
 pub mod systems;
+pub mod validate;

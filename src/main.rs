@@ -3,10 +3,10 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use tumble::engine::Simulation;
-use tumble::output::peak_memory_bytes;
+use tumble::io::output::peak_memory_bytes;
 use tumble::run::{RunOptions, run_scene};
 use tumble::scene::{Scene, SceneError};
+use tumble::sim::engine::Simulation;
 use tumble::validate::{CASES, run_case};
 
 #[derive(Parser)]
@@ -124,7 +124,7 @@ fn main() -> ExitCode {
                 checkpoint_every,
             };
             // Ctrl-C and SIGTERM stop the run after its current step, with a checkpoint.
-            if let Err(e) = tumble::checkpoint::install_interrupt_handler() {
+            if let Err(e) = tumble::io::checkpoint::install_interrupt_handler() {
                 eprintln!("warning: {e:#}");
             }
             let result = match (restart, loaded) {
@@ -164,7 +164,7 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e)
-                    if e.downcast_ref::<tumble::checkpoint::Interrupted>()
+                    if e.downcast_ref::<tumble::io::checkpoint::Interrupted>()
                         .is_some() =>
                 {
                     eprintln!("{e}");
@@ -294,7 +294,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Plot { run_dir } => match tumble::plot::plot_run_dir(&run_dir) {
+        Command::Plot { run_dir } => match tumble::io::plot::plot_run_dir(&run_dir) {
             Ok(paths) => {
                 for p in paths {
                     println!("{}", p.display());

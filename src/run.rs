@@ -1,13 +1,13 @@
 //! `tumble run`: a scene from start to end with outputs, progress and timings; checkpoints
-//! and restarts (see [`crate::checkpoint`]).
+//! and restarts (see [`crate::io::checkpoint`]).
 
-use crate::checkpoint::{self, Checkpoint, CheckpointError, Interrupted, RunProgress};
-use crate::engine::Simulation;
-use crate::fields::Sample;
-use crate::output::{CsvWriter, atomic_write};
-use crate::runlog::RunLog;
+use crate::base::fields::Sample;
+use crate::io::checkpoint::{self, Checkpoint, CheckpointError, Interrupted, RunProgress};
+use crate::io::output::{CsvWriter, atomic_write};
+use crate::io::runlog::RunLog;
+use crate::io::snapshots::Snapshots;
 use crate::scene::Scene;
-use crate::snapshots::Snapshots;
+use crate::sim::engine::Simulation;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -92,7 +92,7 @@ pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> 
         bad(format!(
             "cannot create the output directory {}: {}",
             dir.display(),
-            crate::output::disk_full(&dir, e)
+            crate::io::output::disk_full(&dir, e)
         ))
     })?;
     Ok(dir)
@@ -165,7 +165,7 @@ fn start_run(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<Ru
         rayon::current_num_threads(),
         dir.display()
     );
-    tracing::info!("{}", crate::runlog::scene_summary(&scene));
+    tracing::info!("{}", crate::io::runlog::scene_summary(&scene));
     for w in scene.warnings() {
         tracing::warn!("{w}");
         if !opts.quiet {
@@ -571,7 +571,7 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
             summary.last.t
         ),
     }
-    crate::runlog::timings_table(&summary.system_seconds, summary.steps_run, wall);
+    crate::io::runlog::timings_table(&summary.system_seconds, summary.steps_run, wall);
     let mut timing_lines = String::from("system,seconds_total,seconds_per_step\n");
     for (name, s) in &summary.system_seconds {
         timing_lines.push_str(&format!(
@@ -583,7 +583,7 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
         .context("cannot write timings.csv")?;
     // PNG plots of the time series (also after a stopped run: they show what happened). A
     // plot that cannot be drawn is a warning, not a failed run.
-    match crate::plot::plot_run_dir(&dir) {
+    match crate::io::plot::plot_run_dir(&dir) {
         Ok(files) => tracing::info!("plots: {}", files.len()),
         Err(e) => {
             tracing::warn!("no plots: {e:#}");
@@ -622,7 +622,7 @@ fn write_row(series: &mut CsvWriter, s: &Sample) -> anyhow::Result<()> {
 /// Write a snapshot and log a one-line summary of the state.
 fn write_snapshot(sim: &Simulation, snaps: &mut Snapshots) -> anyhow::Result<()> {
     let files = snaps.write(sim)?;
-    crate::runlog::output_line(sim, &files);
+    crate::io::runlog::output_line(sim, &files);
     Ok(())
 }
 

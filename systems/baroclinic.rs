@@ -17,12 +17,12 @@
 //! that grew as Δt shrank (terminal velocity +23% from Δt = 1.5e-3 to 3.75e-4 at h = 1/128),
 //! while with the rigid acceleration the fall does not depend on Δt.
 
+use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::grid::Grid;
+use crate::base::params::{BodyCoupling, InterfaceAcceleration};
 use crate::bodies::{
     Body, BodyFields, Material, NO_BODY, PreviousVelocity, RigidAccel, RigidState,
 };
-use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::grid::Grid;
-use crate::scene::{BodyCoupling, InterfaceAcceleration};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -87,7 +87,7 @@ pub fn baroclinic(
     let u_prev = std::mem::take(&mut fields.u_prev);
     let omega = fields.omega_mut();
     // One task per row; each writes only its own row of ω.
-    let ptrs = crate::grid::component_ptrs(omega);
+    let ptrs = crate::base::grid::component_ptrs(omega);
     (0..ny * nz).into_par_iter().for_each(|row| {
         let (j, k) = (row % ny, row / ny);
         let (jm, jp) = nb(j, ny);

@@ -38,63 +38,17 @@
 //! evaluated in parallel and added in a fixed order, so results do not depend on the thread
 //! count.
 
+use crate::base::fields::{SimTime, SystemTimer, Timings};
+use crate::base::grid::Grid;
+use crate::bodies::contact::ContactParams;
 use crate::bodies::{
     Body, BodyShape, ContactPoints, ContactState, GridPatch, Material, RigidState,
 };
-use crate::fields::{SimTime, SystemTimer, Timings};
-use crate::grid::Grid;
-use crate::scene::Scene;
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::math::Vector as PVec;
 use rayon::prelude::*;
-
-/// Contact parameters of the scene.
-#[derive(Resource, Debug, Clone)]
-pub struct ContactParams {
-    /// Range ε of the repulsion (length).
-    pub eps: f64,
-    /// Cut-off distance in units of ε.
-    pub range: f64,
-    /// κ for named pairs: (smaller id, larger id, κ), sorted.
-    pub pairs: Vec<(usize, usize, f64)>,
-    /// Evaluate the force at the poses the bodies will have at the end of the step if they
-    /// keep their velocities (with the flow on), instead of at the current poses (vacuum).
-    pub predict: bool,
-}
-
-impl ContactParams {
-    /// The contact parameters of a validated scene on grid spacing `h`.
-    pub fn from_scene(scene: &Scene, h: f64) -> Self {
-        let id = |n: &str| scene.bodies.iter().position(|b| b.name == n);
-        let mut pairs: Vec<(usize, usize, f64)> = scene
-            .contact
-            .pairs
-            .iter()
-            .filter_map(|p| {
-                let (a, b) = (id(&p.bodies.0)?, id(&p.bodies.1)?);
-                Some((a.min(b), a.max(b), p.kappa))
-            })
-            .collect();
-        pairs.sort_by_key(|p| (p.0, p.1));
-        ContactParams {
-            eps: scene.contact.eps.unwrap_or(h),
-            range: scene.contact.range,
-            pairs,
-            predict: !scene.vacuum,
-        }
-    }
-
-    /// κ of the pair (a, b) given the bodies' own values.
-    pub fn kappa(&self, a: usize, b: usize, ka: f64, kb: f64) -> f64 {
-        let key = (a.min(b), a.max(b));
-        match self.pairs.binary_search_by(|p| (p.0, p.1).cmp(&key)) {
-            Ok(i) => self.pairs[i].2,
-            Err(_) => 0.5 * (ka + kb),
-        }
-    }
-}
 
 /// One close pair of bodies after a step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -232,16 +186,6 @@ impl Contacts {
             pairs: Vec::with_capacity(8 * n),
             results: Vec::with_capacity(8 * n),
         }
-    }
-}
-
-/// The one-sided cut-off ζ(s) = 1 - cos 2πs on (0, 1), zero elsewhere; ∫ζ = 1.
-#[inline]
-pub fn zeta(s: f64) -> f64 {
-    if s <= 0.0 || s >= 1.0 {
-        0.0
-    } else {
-        1.0 - (2.0 * std::f64::consts::PI * s).cos()
     }
 }
 

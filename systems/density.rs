@@ -5,9 +5,9 @@
 //! Also keeps Σχ_i and the union level set max_i φ_i for output, and at each node the body
 //! whose level set is the largest there (its owner, for the baroclinic term).
 
+use crate::base::fields::{Params, SystemTimer, Timings};
+use crate::base::grid::Grid;
 use crate::bodies::{Body, BodyFields, GridPatch, Material, NO_BODY};
-use crate::fields::{Params, SystemTimer, Timings};
-use crate::grid::Grid;
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -39,10 +39,10 @@ pub fn density(
         }
         let rows = patch.len() / dx;
         let (rho, chi, phi, owner) = (
-            crate::grid::SyncPtr(out.rho.as_mut_ptr()),
-            crate::grid::SyncPtr(out.chi.as_mut_ptr()),
-            crate::grid::SyncPtr(out.phi.as_mut_ptr()),
-            crate::grid::SyncPtr(out.owner.as_mut_ptr()),
+            crate::base::grid::SyncPtr(out.rho.as_mut_ptr()),
+            crate::base::grid::SyncPtr(out.chi.as_mut_ptr()),
+            crate::base::grid::SyncPtr(out.phi.as_mut_ptr()),
+            crate::base::grid::SyncPtr(out.owner.as_mut_ptr()),
         );
         let id = body.id as u32;
         (0..rows).into_par_iter().for_each(|r| {

@@ -13,9 +13,9 @@
 //! Sums are taken per grid row and then added in row order, so they do not depend on the
 //! number of threads.
 
-use crate::fields::{Fields, Params, Sample, SimTime, SystemTimer, Timings};
-use crate::grid::Grid;
-use crate::scene::TimeStep;
+use crate::base::fields::{Fields, Params, Sample, SimTime, SystemTimer, Timings};
+use crate::base::grid::Grid;
+use crate::base::params::TimeStep;
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 

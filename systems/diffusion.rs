@@ -6,8 +6,8 @@
 //! removes the divergence of ω (ω̂ ← ω̂ - k (k·ω̂)/|k|²). The transform of the result is left
 //! in the spectral solver for the Poisson system, which then needs no forward transform.
 
-use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::spectral::Spectral;
+use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::solvers::spectral::Spectral;
 use bevy_ecs::prelude::*;
 
 /// The diffusion system (skipped for an inviscid fluid; the Poisson solve then cleans the

@@ -12,9 +12,9 @@
 //! one (section 2.2, Fig. 1). The angular momentum is carried from step to step, so a free
 //! body's rotation conserves it while its inertia tensor turns with it.
 
+use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::grid::Grid;
 use crate::bodies::{Body, ContactState, FreeMotion, GridPatch, Material, RigidState};
-use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::grid::Grid;
 use crate::systems::rigid_velocity::{BodySums, mass_properties};
 use bevy_ecs::prelude::*;
 use glam::DVec3;

@@ -7,9 +7,9 @@
 //! do not accumulate. Only the nodes of the box the body (plus a band) can reach are sampled;
 //! χ_i = H_ε(φ_i) is the smoothed Heaviside of half-width ε = `interface_cells` h.
 
+use crate::base::fields::{Params, SimTime, SystemTimer, Timings};
+use crate::base::grid::Grid;
 use crate::bodies::{Body, BodyShape, GridPatch, RigidState, heaviside};
-use crate::fields::{Params, SimTime, SystemTimer, Timings};
-use crate::grid::Grid;
 use crate::systems::diagnostics::Diagnostics;
 use bevy_ecs::prelude::*;
 use glam::DVec3;

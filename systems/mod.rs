@@ -1,4 +1,4 @@
-//! The physics systems, one file each, in schedule order (see `crate::schedule`).
+//! The physics systems, one file each, in schedule order (see `sim::schedule`).
 //!
 //! Each file opens with the equation it implements and the paper's equation number
 //! (Coquerelle & Cottet, J. Comput. Phys. 227 (2008)).

@@ -27,10 +27,10 @@
 //! 1.51, even with the body's extra mass moved into the mask), so their rigid region stays
 //! the whole smoothed band, the same χ as their density and mass.
 
+use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::grid::{Grid, component_ptrs};
+use crate::base::params::BodyCoupling;
 use crate::bodies::{Body, BodyFields, GridPatch, Hydro, RigidState};
-use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::grid::{Grid, component_ptrs};
-use crate::scene::BodyCoupling;
 use crate::systems::rigid_velocity::BodySums;
 use bevy_ecs::prelude::*;
 use glam::DVec3;

@@ -7,8 +7,8 @@
 //! uniform background velocity. The velocity it replaces is kept as the previous velocity
 //! (for the mid-step extrapolation in transport and for ∂u/∂t in the baroclinic term).
 
-use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::spectral::Spectral;
+use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::solvers::spectral::Spectral;
 use bevy_ecs::prelude::*;
 
 /// The Poisson system.

@@ -8,8 +8,8 @@
 //! kinematic bodies their prescribed motion, static bodies stay. The velocities used are kept
 //! as the next step's previous velocity ([`PreviousVelocity`]).
 
+use crate::base::fields::{SimTime, SystemTimer, Timings};
 use crate::bodies::{Body, PreviousVelocity, RigidState, kinematic_velocity};
-use crate::fields::{SimTime, SystemTimer, Timings};
 use bevy_ecs::prelude::*;
 use glam::DQuat;
 

@@ -32,10 +32,10 @@
 //! (section 3.2). Kinematic bodies take their prescribed motion; static ones stay at rest. Sums are taken per
 //! patch row and added in row order (thread-count independent).
 
+use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::grid::Grid;
+use crate::base::params::BodyCoupling;
 use crate::bodies::{Body, GridPatch, Hydro, Material, RigidState, kinematic_velocity};
-use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::grid::Grid;
-use crate::scene::BodyCoupling;
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;

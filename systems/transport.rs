@@ -29,10 +29,10 @@
 //! Nodes whose vorticity is at or below the cutoff create no particle: their vorticity stays
 //! where it is (circulation is kept; the error is of the size of the cutoff).
 
-use crate::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::grid::{Grid, component_ptrs};
-use crate::kernels::{lambda42_weights, m4prime_weights, split};
-use crate::scene::RemeshKernel;
+use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::grid::{Grid, component_ptrs};
+use crate::base::kernels::{lambda42_weights, m4prime_weights, split};
+use crate::base::params::RemeshKernel;
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 

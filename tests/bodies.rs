@@ -5,8 +5,8 @@
 use glam::{DQuat, DVec3};
 use std::f64::consts::PI;
 use tumble::bodies::{Body, GridPatch, RigidState};
-use tumble::engine::Simulation;
 use tumble::scene::Scene;
+use tumble::sim::engine::Simulation;
 
 fn sim(text: &str) -> Simulation {
     let mut scene = Scene::parse(text, "test", "test").unwrap_or_else(|e| panic!("{e}"));
@@ -83,7 +83,7 @@ fn level_set_error(s: &mut Simulation, h: f64) -> (f64, usize) {
     let t = s.time();
     let center = DVec3::new(0.4 + 0.01 * t, 0.4 + 0.005 * t, 0.0);
     let rot = DQuat::from_rotation_z(t);
-    let shape = tumble::shapes::Shape::Ellipse { radii: [0.2, 0.15] };
+    let shape = tumble::bodies::shapes::Shape::Ellipse { radii: [0.2, 0.15] };
     let geom = shape.build(std::path::Path::new(".")).unwrap();
     let grid = s.grid().clone();
     let mut q = s.world.query::<(&Body, &GridPatch, &RigidState)>();

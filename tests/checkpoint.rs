@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-use tumble::checkpoint::{self, BodyState, Checkpoint, RunProgress};
-use tumble::engine::Simulation;
+use tumble::io::checkpoint::{self, BodyState, Checkpoint, RunProgress};
 use tumble::scene::Scene;
+use tumble::sim::engine::Simulation;
 
 /// 2D: a heavy disk thrown at the floor of a static cavity (contact from the first step), a
 /// kinematic paddle oscillating and turning, a vortex, adaptive time step.
@@ -126,7 +126,7 @@ fn state(
     let s = sim.sample();
     let clock = [
         sim.time(),
-        sim.world.resource::<tumble::fields::SimTime>().dt,
+        sim.world.resource::<tumble::base::fields::SimTime>().dt,
         f.dt_prev,
         s.energy,
         s.enstrophy,
@@ -400,7 +400,7 @@ fn killed_run_leaves_whole_files_and_restarts() {
             continue;
         }
         if name.ends_with(".vti") {
-            let v = tumble::output::read_vti(&out.join(&name))
+            let v = tumble::io::output::read_vti(&out.join(&name))
                 .unwrap_or_else(|e| panic!("{name} is torn: {e}"));
             assert!(v.time.is_some());
         }
@@ -532,7 +532,7 @@ fn bad_checkpoints_are_refused() {
     let vlen = u64::from_le_bytes(version[12..20].try_into().unwrap()) as usize;
     assert_eq!(
         &version[20..20 + vlen],
-        tumble::checkpoint::CRATE_VERSION.as_bytes()
+        tumble::io::checkpoint::CRATE_VERSION.as_bytes()
     );
     version[20] = b'7';
     let e = refused(&write("version.bin", &version), &[], "other version");

@@ -4,10 +4,10 @@
 //! continuous model, independently of the grid code), and no body passes through a wall.
 
 use std::f64::consts::PI;
+use tumble::bodies::contact::zeta;
 use tumble::bodies::{Body, RigidState};
-use tumble::engine::Simulation;
 use tumble::scene::Scene;
-use tumble::systems::collision::zeta;
+use tumble::sim::engine::Simulation;
 
 fn sim(text: &str) -> Simulation {
     let scene = Scene::parse(text, "test", "test").unwrap_or_else(|e| panic!("{e}"));
@@ -324,9 +324,9 @@ fn stiff_head_on_contact_in_a_fluid_step_exchanges_the_right_impulse() {
     // Give each sphere and the fluid in and around it the velocities ±1 (the body's rigid
     // velocity is its momentum balance with the flow inside it, and contact acts on that).
     let centres = [0.5 - r - 0.5 * gap, 0.5 + r + 0.5 * gap];
-    let grid = s.world.resource::<tumble::grid::Grid>().clone();
+    let grid = s.world.resource::<tumble::base::grid::Grid>().clone();
     {
-        let mut fields = s.world.resource_mut::<tumble::fields::Fields>();
+        let mut fields = s.world.resource_mut::<tumble::base::fields::Fields>();
         for k in 0..grid.n[2] {
             for j in 0..grid.n[1] {
                 for i in 0..grid.n[0] {

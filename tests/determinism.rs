@@ -1,7 +1,7 @@
 //! The same scene gives bit-identical results with 1 and 2 threads.
 
-use tumble::engine::Simulation;
 use tumble::scene::Scene;
+use tumble::sim::engine::Simulation;
 
 fn run(threads: usize, text: &str) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, f64) {
     let pool = rayon::ThreadPoolBuilder::new()

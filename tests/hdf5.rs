@@ -3,9 +3,9 @@
 #![cfg(feature = "hdf5")]
 
 use std::path::{Path, PathBuf};
-use tumble::engine::Simulation;
 use tumble::run::{RunOptions, run_scene};
 use tumble::scene::Scene;
+use tumble::sim::engine::Simulation;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("tumble-hdf5-{}-{name}", std::process::id()));

@@ -4,8 +4,8 @@ use std::fs;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use tumble::grid::Grid;
-use tumble::output::{
+use tumble::base::grid::Grid;
+use tumble::io::output::{
     CsvWriter, PvdSeries, VtkField, atomic_write, atomic_write_with, peak_memory_bytes, read_vti,
     write_vti,
 };

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use tumble::plot::{Series, Style, line_chart, plot_run_dir};
+use tumble::io::plot::{Series, Style, line_chart, plot_run_dir};
 
 /// A fresh, empty directory under the system temp dir, unique to this process and `name`.
 fn tmp(name: &str) -> PathBuf {

@@ -1,8 +1,8 @@
 //! Every bundled scene loads; bad scenes give errors that name the file, line and field.
 
 use std::path::Path;
-use tumble::engine::Simulation;
 use tumble::scene::Scene;
+use tumble::sim::engine::Simulation;
 
 #[test]
 fn every_bundled_scene_loads_and_steps() {

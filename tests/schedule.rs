@@ -2,9 +2,9 @@
 //! hook into the empty First/Last sets, and an ambiguous pair is rejected.
 
 use bevy_ecs::prelude::*;
-use tumble::engine::Simulation;
 use tumble::scene::Scene;
-use tumble::schedule::{PhysicsSet, step_schedule};
+use tumble::sim::engine::Simulation;
+use tumble::sim::schedule::{PhysicsSet, step_schedule};
 
 const SCENE: &str = r#"Scene(
     domain: (extent: [1.0, 1.0], cells: [16, 16]),
@@ -35,13 +35,13 @@ fn user_systems_run_first_and_last() {
     let mut s = sim();
     s.world.insert_resource(Trace::default());
     s.schedule.add_systems(
-        (|mut t: ResMut<Trace>, time: Res<tumble::fields::SimTime>| {
+        (|mut t: ResMut<Trace>, time: Res<tumble::base::fields::SimTime>| {
             t.0.push(if time.step == 0 { "first@0" } else { "first" })
         })
         .in_set(PhysicsSet::First),
     );
     s.schedule.add_systems(
-        (|mut t: ResMut<Trace>, time: Res<tumble::fields::SimTime>| {
+        (|mut t: ResMut<Trace>, time: Res<tumble::base::fields::SimTime>| {
             // Diagnostics has advanced the clock before Last runs.
             assert!(time.step >= 1);
             t.0.push("last")

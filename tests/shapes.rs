@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use glam::{DMat3, DVec3};
-use tumble::levelset::LocalLevelSet;
-use tumble::shapes::{Shape, ShapeGeometry};
+use tumble::bodies::levelset::LocalLevelSet;
+use tumble::bodies::shapes::{Shape, ShapeGeometry};
 
 // ------------------------------------------------------------------------------------------
 // helpers

@@ -1,4 +1,4 @@
-//! Integration tests of the periodic FFT solver (`tumble::spectral`).
+//! Integration tests of the periodic FFT solver (`tumble::solvers::spectral`).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -6,8 +6,8 @@ use std::f64::consts::PI;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use tumble::grid::Grid;
-use tumble::spectral::*;
+use tumble::base::grid::Grid;
+use tumble::solvers::spectral::*;
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting: only threads marked through `MARK` (the workers of a dedicated rayon pool

@@ -76,6 +76,18 @@ pub fn split(x: f64) -> (i64, f64) {
     (b, x - b as f64)
 }
 
+/// The smoothed Heaviside function of half-width `eps`: 0 below -eps, 1 above eps.
+#[inline]
+pub fn heaviside(phi: f64, eps: f64) -> f64 {
+    if phi <= -eps {
+        0.0
+    } else if phi >= eps {
+        1.0
+    } else {
+        0.5 * (1.0 + phi / eps + (std::f64::consts::PI * phi / eps).sin() / std::f64::consts::PI)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,11 +6,37 @@
 //! grid it covers). Memory and work per body scale with the body's size, not the domain's,
 //! except for unbounded shapes (walls), whose patch is the whole grid.
 
-use crate::grid::Grid;
-use crate::levelset::LocalLevelSet;
-use crate::scene::{BodyKind, Scene};
+use crate::base::grid::Grid;
+pub use crate::base::kernels::heaviside;
+use crate::bodies::levelset::LocalLevelSet;
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+/// How a body moves.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum BodyKind {
+    /// Moves with the mean motion of the fluid inside it (two-way coupled, eq. 7).
+    Dynamic,
+    /// Never moves (walls, floors, tanks).
+    Static,
+    /// Prescribed motion: velocity(t) = velocity + amplitude sin(2π frequency t), and a constant
+    /// angular velocity.
+    Kinematic {
+        /// Constant part of the velocity, length/time (one entry per axis).
+        velocity: Vec<f64>,
+        /// Angular velocity, rad/time: 1 entry (about z) in 2D, 3 in 3D. Default: zero.
+        #[serde(default)]
+        angular_velocity: Vec<f64>,
+        /// Amplitude of the oscillating part of the velocity, length/time. Default: zero.
+        #[serde(default)]
+        amplitude: Vec<f64>,
+        /// Frequency of the oscillation, 1/time. Default: 0.
+        #[serde(default)]
+        frequency: f64,
+    },
+}
 
 /// Identity and kind of a body.
 #[derive(Component, Debug, Clone)]
@@ -209,7 +235,7 @@ impl ContactPoints {
                     if phi > -spacing {
                         out.radius = out.radius.max(p.length() + spacing);
                     }
-                    let w = crate::systems::collision::zeta(phi / eps) / eps * dv;
+                    let w = crate::bodies::contact::zeta(phi / eps) / eps * dv;
                     if with_points && w > 0.0 {
                         out.points.push(p);
                         out.phi.push(phi);
@@ -290,18 +316,6 @@ impl BodyFields {
     }
 }
 
-/// The smoothed Heaviside function of half-width `eps`: 0 below -eps, 1 above eps.
-#[inline]
-pub fn heaviside(phi: f64, eps: f64) -> f64 {
-    if phi <= -eps {
-        0.0
-    } else if phi >= eps {
-        1.0
-    } else {
-        0.5 * (1.0 + phi / eps + (std::f64::consts::PI * phi / eps).sin() / std::f64::consts::PI)
-    }
-}
-
 /// A 3-vector from a scene list (missing entries are zero).
 pub fn vec3(v: &[f64]) -> DVec3 {
     DVec3::new(
@@ -324,96 +338,6 @@ pub fn angular3(v: &[f64]) -> DVec3 {
 /// interface computations need φ a few cells outside the body.
 pub fn band(grid: &Grid) -> f64 {
     6.0 * grid.h
-}
-
-/// Spawn the scene's bodies into `world`; errors name the body.
-pub fn spawn_bodies(world: &mut World, scene: &Scene, grid: &Grid) -> anyhow::Result<usize> {
-    let rho_f = scene.fluid.density;
-    for (id, spec) in scene.bodies.iter().enumerate() {
-        let geom = spec.shape.build(&scene.base_dir).map_err(|e| {
-            anyhow::anyhow!(
-                "scene error in body `{}` (bodies[{id}].shape): {e}",
-                spec.name
-            )
-        })?;
-        let level_set = LocalLevelSet::new(geom, grid.h, band(grid), grid.dim);
-        let eps = scene.contact.eps.unwrap_or(grid.h);
-        // Quadrature lattice: half a cell in 2D; in 3D a whole cell (8 times fewer points, the
-        // cost of dense piles; the points being material, the force stays conservative).
-        let spacing = if grid.dim == 2 { 0.5 } else { 1.0 } * grid.h.min(eps);
-        let contact_points = ContactPoints::new(
-            &level_set,
-            eps,
-            spacing,
-            grid.dim,
-            matches!(spec.kind, BodyKind::Dynamic),
-        );
-        let density = spec.density.unwrap_or(rho_f);
-        let orientation = {
-            let r = angular3(&spec.rotation);
-            if r.length() > 0.0 {
-                DQuat::from_scaled_axis(r)
-            } else {
-                DQuat::IDENTITY
-            }
-        };
-        let (velocity, angular_velocity) = match &spec.kind {
-            BodyKind::Dynamic => (vec3(&spec.velocity), angular3(&spec.angular_velocity)),
-            BodyKind::Static => (DVec3::ZERO, DVec3::ZERO),
-            BodyKind::Kinematic {
-                velocity,
-                angular_velocity,
-                ..
-            } => (vec3(velocity), angular3(angular_velocity)),
-        };
-        let mut patch = GridPatch::default();
-        // The largest box the body can need in any orientation: its bounding sphere.
-        let cap = match level_set.bounds() {
-            Some((lo, hi)) => {
-                let r = (hi - lo).length() * 0.5;
-                let n = ((2.0 * r / grid.h).ceil() as usize + 3).max(1);
-                let mut c = 1;
-                for a in 0..grid.dim {
-                    c *= n.min(grid.n[a]);
-                }
-                c
-            }
-            None => grid.len(),
-        };
-        patch.phi.reserve_exact(cap);
-        patch.chi.reserve_exact(cap);
-        world.spawn((
-            Body {
-                id,
-                name: spec.name.clone(),
-                kind: spec.kind.clone(),
-            },
-            RigidState {
-                center: vec3(&spec.position),
-                orientation,
-                velocity,
-                angular_velocity,
-                volume: 0.0,
-                centroid: vec3(&spec.position),
-                inertia: DMat3::ZERO,
-            },
-            Material { density },
-            BodyShape { level_set },
-            patch,
-            Hydro::default(),
-            ContactState {
-                kappa: spec.kappa.unwrap_or(scene.contact.kappa),
-                ..Default::default()
-            },
-            FreeMotion::default(),
-            PreviousVelocity {
-                velocity,
-                angular_velocity,
-            },
-            contact_points,
-        ));
-    }
-    Ok(scene.bodies.len())
 }
 
 /// The kinematic velocity of a body at time `t`.

@@ -24,7 +24,7 @@
 //!   next output time), so a restarted run continues its files without duplicate rows. HDF5
 //!   outputs need nothing more here: a restart reads the times of the `.h5` snapshots kept
 //!   (for `fields.xmf`) and `series.h5`, written at every checkpoint, back from the run
-//!   directory (see [`crate::snapshots::Snapshots::resume`]).
+//!   directory (see [`crate::io::snapshots::Snapshots::resume`]).
 //!
 //! Format (little-endian): the magic `TUMBLECK`, the format version (u32), the tumble version
 //! (string), the CRC-32 of the scene text, the payload (f64 as raw bits, so values come back
@@ -36,12 +36,12 @@
 //! same directory, fsync, rename), so a killed run leaves the previous checkpoint or the new
 //! one, never a torn file.
 
+use crate::base::fields::{Fields, Sample, SimTime};
 use crate::bodies::{Body, ContactState, FreeMotion, Hydro, PreviousVelocity, RigidState};
-use crate::engine::Simulation;
-use crate::fields::{Fields, Sample, SimTime};
-use crate::output::atomic_write_with;
+use crate::io::output::atomic_write_with;
 use crate::scene::Scene;
-use crate::spectral::Spectral;
+use crate::sim::engine::Simulation;
+use crate::solvers::spectral::Spectral;
 use crate::systems::diagnostics::Diagnostics;
 use crate::systems::transport::TransportScratch;
 use glam::{DMat3, DQuat, DVec3};

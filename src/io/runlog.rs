@@ -21,19 +21,19 @@ impl RunLog {
     /// Create (truncate) `path` and make it the log of this thread until the value is dropped.
     pub fn create(path: &Path) -> anyhow::Result<Self> {
         let file = File::create(path)
-            .map_err(|e| crate::output::disk_full(path, e))
+            .map_err(|e| crate::io::output::disk_full(path, e))
             .with_context(|| format!("cannot create {}", path.display()))?;
         Ok(Self::to_file(file))
     }
 
-    /// Open `path` for appending (a restarted run, see [`crate::run::restart_run`]) and make
+    /// Open `path` for appending (a restarted run, see `tumble::run::restart_run`) and make
     /// it the log of this thread until the value is dropped.
     pub fn append(path: &Path) -> anyhow::Result<Self> {
         let file = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(path)
-            .map_err(|e| crate::output::disk_full(path, e))
+            .map_err(|e| crate::io::output::disk_full(path, e))
             .with_context(|| format!("cannot open {}", path.display()))?;
         Ok(Self::to_file(file))
     }
@@ -86,7 +86,7 @@ pub fn scene_summary(scene: &crate::scene::Scene) -> String {
 
 /// Log the one-line summary of an output step: step, time, dt, energy, max|ω|, the fastest
 /// moving body's speed (scenes with bodies) and the files just written.
-pub fn output_line(sim: &crate::engine::Simulation, files: &[String]) {
+pub fn output_line(sim: &crate::sim::engine::Simulation, files: &[String]) {
     let s = sim.sample();
     let mut fastest: Option<(f64, &str)> = None;
     let mut q = sim

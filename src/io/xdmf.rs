@@ -11,8 +11,8 @@
 //! [`XdmfSeries::push`] rewrites the whole file atomically after each snapshot, so it only
 //! lists complete snapshots.
 
-use crate::grid::Grid;
-use crate::output::{atomic_write, fmt_f64};
+use crate::base::grid::Grid;
+use crate::io::output::{atomic_write, fmt_f64};
 use std::fmt::Write as _;
 use std::io;
 use std::path::{Path, PathBuf};

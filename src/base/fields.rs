@@ -3,8 +3,8 @@
 //! Dense grids are resources, never entities: one `Vec<f64>` per component, indexed by
 //! [`Grid::idx`]. In 2D the vorticity is a scalar (one component) and the velocity has two.
 
-use crate::grid::Grid;
-use crate::scene::{Scene, TimeStep};
+use crate::base::grid::Grid;
+use crate::base::params::{BodyCoupling, InterfaceAcceleration, RemeshKernel, TimeStep};
 use bevy_ecs::prelude::Resource;
 
 /// Vorticity and velocity on the grid.
@@ -87,7 +87,7 @@ pub struct Params {
     /// Carry particles with the mid-step velocity extrapolated from the last two.
     pub midpoint_velocity: bool,
     /// Interpolation and remeshing kernel.
-    pub remesh_kernel: crate::scene::RemeshKernel,
+    pub remesh_kernel: RemeshKernel,
     /// Penalization coefficient λ.
     pub lambda: f64,
     /// Half-width of the smoothed Heaviside, in cells.
@@ -95,11 +95,11 @@ pub struct Params {
     /// Offset of the penalization mask into the body, in cells.
     pub penalization_offset: f64,
     /// How gravity and a dynamic body's inertia reach the body.
-    pub body_coupling: crate::scene::BodyCoupling,
+    pub body_coupling: BodyCoupling,
     /// Boussinesq form of the baroclinic term.
     pub boussinesq: bool,
     /// Du/Dt on the interfaces in the baroclinic term.
-    pub interface_acceleration: crate::scene::InterfaceAcceleration,
+    pub interface_acceleration: InterfaceAcceleration,
     /// Whether the scene has bodies.
     pub has_bodies: bool,
 }
@@ -121,7 +121,7 @@ impl PenalizationMask {
         if self.offset == 0.0 {
             chi
         } else {
-            crate::bodies::heaviside(phi - self.offset, self.eps)
+            crate::base::kernels::heaviside(phi - self.offset, self.eps)
         }
     }
 }
@@ -141,28 +141,6 @@ impl Params {
             self.nu / (h * h)
         } else {
             0.0
-        }
-    }
-
-    /// Parameters of a (validated) scene.
-    pub fn from_scene(scene: &Scene) -> Self {
-        Params {
-            nu: scene.fluid.viscosity,
-            rho_fluid: scene.fluid.density,
-            gravity: scene.gravity(),
-            background: scene.background_velocity(),
-            dt_policy: scene.numerics.dt.clone(),
-            remesh_cutoff: scene.numerics.remesh_cutoff,
-            blowup_factor: scene.numerics.blowup_factor,
-            midpoint_velocity: scene.numerics.midpoint_velocity,
-            remesh_kernel: scene.numerics.remesh_kernel,
-            lambda: scene.numerics.lambda,
-            interface_cells: scene.numerics.interface_cells,
-            penalization_offset: scene.numerics.penalization_offset,
-            body_coupling: scene.numerics.body_coupling,
-            boussinesq: scene.numerics.boussinesq,
-            interface_acceleration: scene.numerics.interface_acceleration,
-            has_bodies: !scene.bodies.is_empty(),
         }
     }
 }

@@ -1,6 +1,6 @@
 //! Named initial vorticity fields, sampled at the grid nodes.
 
-use crate::grid::Grid;
+use crate::base::grid::Grid;
 use crate::scene::InitialVorticity;
 use rayon::prelude::*;
 use std::f64::consts::PI;

@@ -9,7 +9,7 @@
 //! A [`Shape`] is the scene-file description; [`Shape::build`] turns it into a
 //! [`ShapeGeometry`] (loading mesh files) whose [`ShapeGeometry::phi`] is the exact signed
 //! distance. Bodies do not call `phi` on the fly: they sample it once on a local grid, see
-//! [`crate::levelset::LocalLevelSet`].
+//! [`crate::bodies::levelset::LocalLevelSet`].
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -346,7 +346,7 @@ impl ShapeGeometry {
     /// point by a robust bisection to full double precision). 2D shapes ignore `p.z`.
     ///
     /// Ellipse, ellipsoid and mesh queries cost far more than the others (an iterative solve,
-    /// a BVH traversal): sample them once, see [`crate::levelset::LocalLevelSet`].
+    /// a BVH traversal): sample them once, see [`crate::bodies::levelset::LocalLevelSet`].
     #[inline]
     pub fn phi(&self, p: DVec3) -> f64 {
         self.kind.phi(p)

@@ -37,7 +37,7 @@ use realfft::{ComplexToReal, FftError, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
-use crate::grid::{Grid, SyncPtr};
+use crate::base::grid::{Grid, SyncPtr};
 
 /// Double precision complex number.
 pub type C64 = Complex<f64>;

@@ -4,15 +4,15 @@
 //! A snapshot file `fields_NNNNNN.h5` holds one dataset per field at its root (`/omega`,
 //! `/velocity`, `/density`, `/chi`, `/phi`), C order, shape `(nz, ny, nx)` in 3D and
 //! `(ny, nx)` in 2D with a trailing axis of 3 for vectors (z = 0 in 2D), see
-//! [`crate::xdmf::dataset_shape`]; and root attributes `time`, `step`, `origin`, `spacing`
+//! [`crate::io::xdmf::dataset_shape`]; and root attributes `time`, `step`, `origin`, `spacing`
 //! (x, y, z) and `dims` (nx, ny, nz). `series.h5` is described at [`write_series`].
 //!
 //! Both are written to a temporary name next to the target, closed, fsynced and renamed over
 //! it, so a killed run leaves only complete files.
 
-use crate::grid::Grid;
-use crate::output::{VtkField, disk_full, temp_path};
-use crate::xdmf::dataset_shape;
+use crate::base::grid::Grid;
+use crate::io::output::{VtkField, disk_full, temp_path};
+use crate::io::xdmf::dataset_shape;
 use std::io;
 use std::path::Path;
 
@@ -73,7 +73,7 @@ fn dataset(group: &hdf5::Group, name: &str, shape: &[usize], v: &[f64]) -> hdf5:
         .write_raw(v)
 }
 
-/// Write one snapshot: `fields` (as for [`crate::output::write_vti`]) on `grid` at `time`.
+/// Write one snapshot: `fields` (as for [`crate::io::output::write_vti`]) on `grid` at `time`.
 pub fn write_fields(
     path: &Path,
     grid: &Grid,

@@ -8,17 +8,16 @@
 //! the measured curve over the reference. [`run_case`] only collects them; `tumble validate`
 //! writes them as PNG files with [`Report::write_plots`].
 
-use crate::engine::Simulation;
-use crate::grid::Grid;
-use crate::plot::{Series, Style, line_chart};
+use crate::base::grid::Grid;
+use crate::io::plot::{Series, Style, line_chart};
 use crate::scene::{RemeshKernel, Scene};
-use crate::spectral::Spectral;
+use crate::sim::engine::Simulation;
+use crate::solvers::spectral::Spectral;
 use crate::systems::transport::{LineScratch, sweep};
 use std::f64::consts::PI;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-#[path = "validate_contact.rs"]
 mod contact;
 
 /// Every case, in the order `tumble validate` runs them.
@@ -40,37 +39,43 @@ pub const CASES: &[&str] = &[
 
 /// The bundled scenes, by file name (so validation runs from any directory).
 pub const SCENES: &[(&str, &str)] = &[
-    ("lamb-oseen.ron", include_str!("../scenes/lamb-oseen.ron")),
+    (
+        "lamb-oseen.ron",
+        include_str!("../../scenes/lamb-oseen.ron"),
+    ),
     (
         "taylor-green-2d.ron",
-        include_str!("../scenes/taylor-green-2d.ron"),
+        include_str!("../../scenes/taylor-green-2d.ron"),
     ),
     (
         "taylor-green-3d.ron",
-        include_str!("../scenes/taylor-green-3d.ron"),
+        include_str!("../../scenes/taylor-green-3d.ron"),
     ),
-    ("vortex-ring.ron", include_str!("../scenes/vortex-ring.ron")),
+    (
+        "vortex-ring.ron",
+        include_str!("../../scenes/vortex-ring.ron"),
+    ),
     (
         "sedimentation-2d.ron",
-        include_str!("../scenes/sedimentation-2d.ron"),
+        include_str!("../../scenes/sedimentation-2d.ron"),
     ),
     (
         "sphere-settling.ron",
-        include_str!("../scenes/sphere-settling.ron"),
+        include_str!("../../scenes/sphere-settling.ron"),
     ),
     (
         "rebound-vacuum.ron",
-        include_str!("../scenes/rebound-vacuum.ron"),
+        include_str!("../../scenes/rebound-vacuum.ron"),
     ),
     (
         "ellipsoid-sphere.ron",
-        include_str!("../scenes/ellipsoid-sphere.ron"),
+        include_str!("../../scenes/ellipsoid-sphere.ron"),
     ),
-    ("dkt.ron", include_str!("../scenes/dkt.ron")),
-    ("tank-200.ron", include_str!("../scenes/tank-200.ron")),
+    ("dkt.ron", include_str!("../../scenes/dkt.ron")),
+    ("tank-200.ron", include_str!("../../scenes/tank-200.ron")),
     (
         "tank-200-vacuum.ron",
-        include_str!("../scenes/tank-200-vacuum.ron"),
+        include_str!("../../scenes/tank-200-vacuum.ron"),
     ),
 ];
 
@@ -1141,17 +1146,17 @@ fn settling_run_dt(
     scene.fluid.viscosity = nu;
     for b in &mut scene.bodies {
         match &mut b.shape {
-            crate::shapes::Shape::Sphere { radius } => {
+            crate::bodies::shapes::Shape::Sphere { radius } => {
                 *radius = 0.5 * d;
                 if let Some(file) = mesh {
-                    b.shape = crate::shapes::Shape::Mesh {
+                    b.shape = crate::bodies::shapes::Shape::Mesh {
                         file: file.to_string(),
                         scale: 1.0,
                     };
                 }
             }
-            crate::shapes::Shape::Complement(inner) => {
-                **inner = crate::shapes::Shape::Cylinder {
+            crate::bodies::shapes::Shape::Complement(inner) => {
+                **inner = crate::bodies::shapes::Shape::Cylinder {
                     radius: 0.5,
                     half_height: 2.0 - wall,
                 }

@@ -1,11 +1,11 @@
 //! The simulation: a `bevy_ecs` world holding the resources, and the two schedules.
 
-use crate::fields::{Fields, Params, Sample, SimTime, Timings};
-use crate::grid::Grid;
-use crate::init::add_initial;
+use crate::base::fields::{Fields, Params, Sample, SimTime, Timings};
+use crate::base::grid::Grid;
 use crate::scene::Scene;
-use crate::schedule::{startup_schedule, step_schedule_with, vacuum_schedule};
-use crate::spectral::Spectral;
+use crate::sim::init::add_initial;
+use crate::sim::schedule::{startup_schedule, step_schedule_with, vacuum_schedule};
+use crate::solvers::spectral::Spectral;
 use crate::systems::diagnostics::Diagnostics;
 use crate::systems::transport::TransportScratch;
 use bevy_ecs::prelude::*;
@@ -14,7 +14,7 @@ use bevy_ecs::prelude::*;
 pub struct Simulation {
     /// The ECS world: resources (grid, fields, solvers) and, later, body entities.
     pub world: World,
-    /// The step schedule: add your own systems to it (see [`crate::schedule`]).
+    /// The step schedule: add your own systems to it (see [`crate::sim::schedule`]).
     pub schedule: Schedule,
     scene: Scene,
 }
@@ -30,7 +30,7 @@ impl Simulation {
         for init in &scene.initial {
             add_initial(&grid, init, fields.omega_mut());
         }
-        world.insert_resource(Params::from_scene(&scene));
+        world.insert_resource(crate::sim::build::params(&scene));
         world.insert_resource(fields);
         world.insert_resource(Spectral::new(&grid));
         world.insert_resource(TransportScratch::new(&grid));
@@ -40,7 +40,7 @@ impl Simulation {
             ..Default::default()
         });
         world.insert_resource(Timings::default());
-        let n_bodies = crate::bodies::spawn_bodies(&mut world, &scene, &grid)?;
+        let n_bodies = crate::sim::build::spawn_bodies(&mut world, &scene, &grid)?;
         if n_bodies > 0 {
             world.insert_resource(crate::bodies::BodyFields::new(
                 &grid,
@@ -48,9 +48,7 @@ impl Simulation {
                 n_bodies,
             ));
             world.insert_resource(crate::systems::rigid_velocity::BodySums::new(&grid));
-            world.insert_resource(crate::systems::collision::ContactParams::from_scene(
-                &scene, grid.h,
-            ));
+            world.insert_resource(crate::sim::build::contact_params(&scene, grid.h));
             world.insert_resource(crate::systems::collision::Contacts::with_capacity(n_bodies));
         }
         world.insert_resource(grid);

@@ -7,10 +7,10 @@
 //! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
 //! (the snapshots written after the checkpoint removed, the indexes and `series.h5` rewritten).
 
-use crate::checkpoint::RunProgress;
-use crate::engine::Simulation;
-use crate::output::{PvdSeries, VtkField, write_vti};
+use crate::io::checkpoint::RunProgress;
+use crate::io::output::{PvdSeries, VtkField, write_vti};
 use crate::scene::{FieldName, OutputFormat};
+use crate::sim::engine::Simulation;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 
@@ -206,8 +206,8 @@ fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
 
 #[cfg(feature = "hdf5")]
 struct Hdf5Outputs {
-    xmf: crate::xdmf::XdmfSeries,
-    series: crate::hdf5_out::Series,
+    xmf: crate::io::xdmf::XdmfSeries,
+    series: crate::io::hdf5_out::Series,
     /// The step last recorded (a step is recorded once).
     steps_recorded: u64,
 }
@@ -215,7 +215,7 @@ struct Hdf5Outputs {
 #[cfg(feature = "hdf5")]
 impl Hdf5Outputs {
     fn new(dir: &Path, sim: &Simulation) -> Self {
-        use crate::hdf5_out::{BodySeries, ContactSeries, Series};
+        use crate::io::hdf5_out::{BodySeries, ContactSeries, Series};
         use crate::scene::BodyKind;
         let scene = sim.scene();
         let global = ["t", "dt", "energy", "enstrophy", "circulation", "max_omega"]
@@ -239,7 +239,7 @@ impl Hdf5Outputs {
             .any(|b| matches!(b.kind, BodyKind::Dynamic))
             .then(ContactSeries::default);
         Hdf5Outputs {
-            xmf: crate::xdmf::XdmfSeries::new(dir.join("fields.xmf"), sim.grid()),
+            xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), sim.grid()),
             series: Series {
                 global,
                 bodies,
@@ -252,7 +252,7 @@ impl Hdf5Outputs {
 
     /// The outputs of a restarted run after `count` snapshots (see [`Snapshots::resume`]).
     fn resume(dir: &Path, sim: &Simulation, count: usize) -> Result<Self, String> {
-        use crate::xdmf::XdmfEntry;
+        use crate::io::xdmf::XdmfEntry;
         let mut h = Hdf5Outputs::new(dir, sim);
         let (t0, step0) = (sim.time(), sim.steps());
         // A snapshot's fields depend on the scene only: the same for every snapshot.
@@ -260,7 +260,7 @@ impl Hdf5Outputs {
         let mut entries = Vec::with_capacity(count);
         for k in 0..count {
             let file = format!("fields_{k:06}.h5");
-            let time = crate::hdf5_out::read_time(&dir.join(&file))
+            let time = crate::io::hdf5_out::read_time(&dir.join(&file))
                 .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?;
             if time > t0 {
                 return Err(format!(
@@ -275,9 +275,10 @@ impl Hdf5Outputs {
                 attributes: attributes.clone(),
             });
         }
-        h.xmf = crate::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries);
+        h.xmf =
+            crate::io::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries);
         let path = dir.join("series.h5");
-        crate::hdf5_out::read_series(&path, &mut h.series)
+        crate::io::hdf5_out::read_series(&path, &mut h.series)
             .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?;
         cut_series(&mut h.series, step0 as usize + 1, t0).map_err(|e| {
             format!(
@@ -345,9 +346,9 @@ impl Hdf5Outputs {
         sim: &Simulation,
         fields: &[VtkField],
     ) -> anyhow::Result<Vec<String>> {
-        use crate::xdmf::XdmfEntry;
+        use crate::io::xdmf::XdmfEntry;
         let file = format!("fields_{k:06}.h5");
-        crate::hdf5_out::write_fields(
+        crate::io::hdf5_out::write_fields(
             &dir.join(&file),
             sim.grid(),
             sim.time(),
@@ -367,17 +368,17 @@ impl Hdf5Outputs {
     }
 
     fn write_series(&self, dir: &Path) -> anyhow::Result<()> {
-        crate::hdf5_out::write_series(&dir.join("series.h5"), &self.series)
+        crate::io::hdf5_out::write_series(&dir.join("series.h5"), &self.series)
             .context("cannot write series.h5")
     }
 }
 
 /// The XDMF attributes of a snapshot's fields.
 #[cfg(feature = "hdf5")]
-fn xdmf_attributes(fields: &[VtkField]) -> Vec<crate::xdmf::XdmfAttribute> {
+fn xdmf_attributes(fields: &[VtkField]) -> Vec<crate::io::xdmf::XdmfAttribute> {
     fields
         .iter()
-        .map(|f| crate::xdmf::XdmfAttribute {
+        .map(|f| crate::io::xdmf::XdmfAttribute {
             name: f.name.to_string(),
             components: if f.components.len() == 1 { 1 } else { 3 },
         })
@@ -388,7 +389,11 @@ fn xdmf_attributes(fields: &[VtkField]) -> Vec<crate::xdmf::XdmfAttribute> {
 /// state and every step up to a checkpoint at time `t`) and the contacts up to `t`. An error
 /// says what is missing.
 #[cfg(feature = "hdf5")]
-fn cut_series(series: &mut crate::hdf5_out::Series, steps: usize, t: f64) -> Result<(), String> {
+fn cut_series(
+    series: &mut crate::io::hdf5_out::Series,
+    steps: usize,
+    t: f64,
+) -> Result<(), String> {
     let cut = |v: &mut Vec<f64>, per: usize, what: &str| -> Result<(), String> {
         if v.len() < per * steps {
             return Err(format!(

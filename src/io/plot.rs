@@ -29,7 +29,7 @@ pub const SIZE: (u32, u32) = (900, 600);
 pub const MAX_CURVES: usize = 8;
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/LICENSE-DejaVu.txt`).
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
 /// The family name the bundled font is registered under. `plotters` asks for "sans-serif"
 /// wherever no font is given explicitly, so the bundled font serves those too.

@@ -6,8 +6,8 @@
 //! A pair overlaps if some point lies more than half a cell inside both (bodies that touch
 //! or sit within the contact range are fine).
 
+use crate::bodies::shapes::ShapeGeometry;
 use crate::scene::{BodyKind, Scene};
-use crate::shapes::ShapeGeometry;
 use glam::{DQuat, DVec3};
 
 /// The most lattice points sampled per pair (the lattice is coarsened beyond).

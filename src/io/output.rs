@@ -16,7 +16,7 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::grid::Grid;
+use crate::base::grid::Grid;
 
 /// Buffer size for streamed output files.
 const BUF_BYTES: usize = 1 << 20;

@@ -3,7 +3,7 @@
 
 use super::{PlotSpec, Report, Row, bundled_scene};
 use crate::bodies::{Body, ContactState, Material, RigidState};
-use crate::engine::Simulation;
+use crate::sim::engine::Simulation;
 use glam::DVec3;
 
 /// State of every dynamic body: (name, state, density, contact potential).
@@ -65,7 +65,7 @@ fn smallest_sphere_gap<'a>(
 /// (the first body, the outside of a centred box) as [lo, hi] on every axis, and the radius of
 /// the spheres (the second body).
 fn tank_geometry(scene: &crate::scene::Scene) -> anyhow::Result<(f64, f64, f64)> {
-    use crate::shapes::Shape;
+    use crate::bodies::shapes::Shape;
     let (Some(tank), Some(sphere)) = (scene.bodies.first(), scene.bodies.get(1)) else {
         anyhow::bail!("the tank scene needs the box and at least one sphere");
     };

@@ -1,7 +1,7 @@
 //! Per-body reference level sets on local grids.
 //!
 //! Each body keeps its reference signed distance `phi` (positive inside, see
-//! [`crate::shapes`]) sampled once on a small grid in *body coordinates* that covers the
+//! [`crate::bodies::shapes`]) sampled once on a small grid in *body coordinates* that covers the
 //! body's bounding box grown by a band. Memory therefore scales with the body's size, not with
 //! the domain, and the per-query cost is one trilinear (bilinear in 2D) interpolation whatever
 //! the shape (mesh and ellipsoid distances are only evaluated at construction).
@@ -9,7 +9,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::shapes::ShapeGeometry;
+use crate::bodies::shapes::ShapeGeometry;
 
 /// A body's reference signed distance in body coordinates: sampled on a local grid, or kept
 /// analytic for unbounded shapes.

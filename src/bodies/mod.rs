@@ -1,0 +1,9 @@
+//! Rigid bodies: shapes and their signed distances, local level sets, the body components and
+//! the contact kernel. Depends only on [`crate::base`].
+
+mod body;
+pub mod contact;
+pub mod levelset;
+pub mod shapes;
+
+pub use body::*;

@@ -1,0 +1,11 @@
+//! Everything that touches files: VTK and HDF5/XDMF snapshots, checkpoints, the run log and
+//! the plots.
+
+pub mod checkpoint;
+#[cfg(feature = "hdf5")]
+pub mod hdf5_out;
+pub mod output;
+pub mod plot;
+pub mod runlog;
+pub mod snapshots;
+pub mod xdmf;
