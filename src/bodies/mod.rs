@@ -5,5 +5,6 @@ mod body;
 pub mod contact;
 pub mod levelset;
 pub mod shapes;
+pub mod surface;
 
 pub use body::*;

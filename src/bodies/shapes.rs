@@ -16,6 +16,7 @@ use std::f64::consts::PI;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::bodies::surface::SurfaceMesh;
 use glam::{DMat3, DVec2, DVec3};
 use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::query::PointQuery;
@@ -384,6 +385,13 @@ impl ShapeGeometry {
         self.kind.is_expensive()
     }
 
+    /// The boundary of the solid in the body frame, for viewing (see
+    /// [`crate::bodies::surface`]): `half_size` is the half-width of the patch drawn for a
+    /// half-space (length).
+    pub fn surface(&self, half_size: f64) -> SurfaceMesh {
+        self.kind.surface(half_size)
+    }
+
     /// The geometry whose complement this is, if it is a `Complement`.
     pub fn complement_inner(&self) -> Option<ShapeGeometry> {
         match &self.kind {
@@ -408,6 +416,75 @@ fn rect_phi(p: DVec2, he: DVec2) -> f64 {
 }
 
 impl Kind {
+    fn surface(&self, half_size: f64) -> SurfaceMesh {
+        use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder};
+        // parry's cylinders and capsules run along y; ours along the body's z.
+        let y_to_z = |p: DVec3| DVec3::new(p.x, -p.z, p.y);
+        // Polar subdivisions: fine enough to look round at a few cells per radius.
+        const NT: u32 = 32;
+        const NP: u32 = 16;
+        let ring = |n: usize, f: &dyn Fn(f64) -> DVec3| {
+            SurfaceMesh::closed_polyline(
+                (0..n).map(|i| f(2.0 * PI * i as f64 / n as f64)).collect(),
+            )
+        };
+        match self {
+            Kind::Sphere { r } => {
+                let (v, t) = Ball::new(*r).to_trimesh(NT, NP);
+                SurfaceMesh::from_parry(v, t)
+            }
+            Kind::Ellipsoid { radii } => {
+                let (v, t) = Ball::new(1.0).to_trimesh(NT, NP);
+                SurfaceMesh::from_parry(v, t).map(|p| p * *radii)
+            }
+            Kind::Box { he } => {
+                let (v, t) = Cuboid::new(PVec::new(he.x, he.y, he.z)).to_trimesh();
+                SurfaceMesh::from_parry(v, t)
+            }
+            Kind::Cylinder { r, hh } => {
+                let (v, t) = Cylinder::new(*hh, *r).to_trimesh(NT);
+                SurfaceMesh::from_parry(v, t).map(y_to_z)
+            }
+            Kind::Capsule { r, hh } => {
+                let (v, t) = Capsule::new_y(*hh, *r).to_trimesh(NT, NP);
+                SurfaceMesh::from_parry(v, t).map(y_to_z)
+            }
+            Kind::HalfSpace { n, offset } => {
+                // The plane n.x = offset (the solid is n.x <= offset or >= offset: either way
+                // its boundary is this plane).
+                let c = *n * *offset;
+                let (u, w) = n.any_orthonormal_pair();
+                let (u, w) = (u * half_size, w * half_size);
+                SurfaceMesh {
+                    points: vec![c - u - w, c + u - w, c + u + w, c - u + w],
+                    triangles: vec![[0, 1, 2], [0, 2, 3]],
+                    lines: Vec::new(),
+                }
+            }
+            Kind::Disk { r } => ring(96, &|a| DVec3::new(r * a.cos(), r * a.sin(), 0.0)),
+            Kind::Ellipse { radii } => ring(96, &|a| {
+                DVec3::new(radii.x * a.cos(), radii.y * a.sin(), 0.0)
+            }),
+            Kind::Rectangle { he } => SurfaceMesh::closed_polyline(vec![
+                DVec3::new(-he.x, -he.y, 0.0),
+                DVec3::new(he.x, -he.y, 0.0),
+                DVec3::new(he.x, he.y, 0.0),
+                DVec3::new(-he.x, he.y, 0.0),
+            ]),
+            Kind::Complement(inner) => inner.surface(half_size),
+            Kind::Mesh(m) => SurfaceMesh {
+                points: m
+                    .trimesh
+                    .vertices()
+                    .iter()
+                    .map(|p| DVec3::new(p.x, p.y, p.z))
+                    .collect(),
+                triangles: m.trimesh.indices().to_vec(),
+                lines: Vec::new(),
+            },
+        }
+    }
+
     #[inline]
     fn phi(&self, p: DVec3) -> f64 {
         match self {

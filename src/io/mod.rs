@@ -8,4 +8,5 @@ pub mod output;
 pub mod plot;
 pub mod runlog;
 pub mod snapshots;
+pub mod surfaces;
 pub mod xdmf;
