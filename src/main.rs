@@ -187,58 +187,14 @@ fn main() -> ExitCode {
                 Ok(s) => s,
                 Err(code) => return code,
             };
-            let g = scene.grid();
-            println!("scene `{}` is valid", scene.name);
-            for w in scene.warnings() {
-                println!("  warning: {w}");
-            }
-            println!(
-                "  {}D periodic box, origin {:?}, extent {:?}",
-                g.dim,
-                &g.origin[..g.dim],
-                &g.extent()[..g.dim]
-            );
-            println!(
-                "  grid {} nodes (h = {}), {} vorticity component(s)",
-                g.n[..g.dim]
-                    .iter()
-                    .map(|n| n.to_string())
-                    .collect::<Vec<_>>()
-                    .join("x"),
-                g.h,
-                g.omega_components()
-            );
-            println!(
-                "  fluid: density {}, viscosity {}",
-                scene.fluid.density, scene.fluid.viscosity
-            );
-            println!(
-                "  time step {:?}, end time {}",
-                scene.numerics.dt, scene.numerics.end_time
-            );
-            println!("  initial vorticity: {} field(s)", scene.initial.len());
-            for i in &scene.initial {
-                println!("    {i:?}");
-            }
-            println!("  bodies: {}", scene.bodies.len());
             for b in &scene.bodies {
-                let kind = match &b.kind {
-                    tumble::scene::BodyKind::Dynamic => "dynamic".to_string(),
-                    tumble::scene::BodyKind::Static => "static".to_string(),
-                    k => format!("{k:?}"),
-                };
-                let density = b.density.map_or("fluid's".to_string(), |d| format!("{d}"));
-                println!(
-                    "    `{}`: {} {:?} at {:?}, density {density}",
-                    b.name, kind, b.shape, b.position
-                );
                 if let Err(e) = b.shape.build(&scene.base_dir) {
                     eprintln!("error: body `{}`: {e}", b.name);
                     return ExitCode::from(2);
                 }
             }
-            let mem = (g.len() * (2 * g.omega_components() + g.dim) * 8) as f64 / 1e6;
-            println!("  field memory about {mem:.0} MB (plus FFT buffers)");
+            print!("{}", tumble::io::summary::describe(&scene));
+            println!("scene `{}` is valid", scene.name);
             ExitCode::SUCCESS
         }
         Command::Validate {

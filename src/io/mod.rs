@@ -8,5 +8,6 @@ pub mod output;
 pub mod plot;
 pub mod runlog;
 pub mod snapshots;
+pub mod summary;
 pub mod surfaces;
 pub mod xdmf;
