@@ -1,6 +1,6 @@
-//! The checks of a scene, one per type: each returns the first problem as an [`Issue`] with
+//! The checks of a scene, one per type: each returns the first problem as an `Issue` with
 //! the field's path relative to the checked value, and the caller puts it under its own key.
-//! [`check_scene`] runs them all, then builds the bodies' shapes (reading mesh files) and
+//! `check_scene` runs them all, then builds the bodies' shapes (reading mesh files) and
 //! looks for bodies overlapping at the start; it is the only way to a
 //! [`ValidScene`](crate::scene::ValidScene).
 

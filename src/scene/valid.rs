@@ -1,6 +1,6 @@
 //! [`ValidScene`]: a scene that passed every check. Reading a file ([`Scene::load`]), parsing
 //! text ([`Scene::parse`]) and changing a valid scene ([`ValidScene::edit`]) all end in the one
-//! check ([`check_scene`]), and nothing else makes a `ValidScene`.
+//! check (`check_scene` in `check.rs`), and nothing else makes a `ValidScene`.
 
 use super::check::check_scene;
 use super::error::{SceneError, offset_of, path_at};
