@@ -17,8 +17,8 @@ use crate::bodies::shapes::{Shape, ShapeGeometry};
 pub const MAX_NODES: u64 = 1 << 32;
 
 /// Check every value of `scene` (filling in defaults: body names, normalised axes), build its
-/// shapes and check for initial overlaps; on success, the scene's grid.
-pub(crate) fn check_scene(scene: &mut Scene) -> Check<Grid> {
+/// shapes and check for initial overlaps; on success, the scene's grid and its bodies' shapes.
+pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)> {
     check_name(&scene.name).map_err(|i| i.under(Seg::Key("name")))?;
     let grid = scene
         .domain
@@ -59,8 +59,8 @@ pub(crate) fn check_scene(scene: &mut Scene) -> Check<Grid> {
         .output
         .check()
         .map_err(|i| i.under(Seg::Key("output")))?;
-    check_geometry(scene, &grid)?;
-    Ok(grid)
+    let geoms = check_geometry(scene, &grid)?;
+    Ok((grid, geoms))
 }
 
 /// A scene's name names its run directory `runs/<name>`: one plain path component.
@@ -576,8 +576,8 @@ impl Output {
 }
 
 /// Build every body's shape (mesh files are read now, so a missing or broken mesh is a scene
-/// error with its line) and reject bodies that overlap at the start.
-fn check_geometry(scene: &Scene, grid: &Grid) -> Check {
+/// error with its line) and reject bodies that overlap at the start; the shapes, in order.
+fn check_geometry(scene: &Scene, grid: &Grid) -> Check<Vec<ShapeGeometry>> {
     let mut geoms: Vec<ShapeGeometry> = Vec::with_capacity(scene.bodies.len());
     for (i, b) in scene.bodies.iter().enumerate() {
         let g = b.shape.build(&scene.base_dir).map_err(|e| {
@@ -610,7 +610,7 @@ fn check_geometry(scene: &Scene, grid: &Grid) -> Check {
         .under(Seg::Index(o.b))
         .under(Seg::Key("bodies")));
     }
-    Ok(())
+    Ok(geoms)
 }
 
 impl Scene {

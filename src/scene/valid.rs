@@ -6,14 +6,17 @@ use super::check::check_scene;
 use super::error::{SceneError, offset_of, path_at};
 use super::format::Scene;
 use crate::base::grid::Grid;
+use crate::bodies::shapes::ShapeGeometry;
 use std::path::Path;
 
-/// A scene whose values, meshes and initial placement have been checked, with its grid. Read
-/// it as a [`Scene`] (it dereferences to one); change it with [`ValidScene::edit`].
-#[derive(Debug, Clone, PartialEq)]
+/// A scene whose values, meshes and initial placement have been checked, with its grid and
+/// its bodies' shapes. Read it as a [`Scene`] (it dereferences to one); change it with
+/// [`ValidScene::edit`].
+#[derive(Debug, Clone)]
 pub struct ValidScene {
     scene: Scene,
     grid: Grid,
+    geoms: Vec<ShapeGeometry>,
     file: String,
 }
 
@@ -28,6 +31,11 @@ impl ValidScene {
     /// The grid this scene runs on.
     pub fn grid(&self) -> Grid {
         self.grid.clone()
+    }
+
+    /// The bodies' shapes (meshes read), in the order of `bodies`.
+    pub fn geometries(&self) -> &[ShapeGeometry] {
+        &self.geoms
     }
 
     /// The file the scene was read from (as named in errors).
@@ -53,10 +61,11 @@ impl ValidScene {
 
 /// The one path to a [`ValidScene`]: every check, errors located in `text` when given.
 fn validate(mut scene: Scene, file: &str, text: Option<&str>) -> Result<ValidScene, SceneError> {
-    let grid = check_scene(&mut scene).map_err(|i| i.into_error(file, text))?;
+    let (grid, geoms) = check_scene(&mut scene).map_err(|i| i.into_error(file, text))?;
     Ok(ValidScene {
         scene,
         grid,
+        geoms,
         file: file.to_string(),
     })
 }

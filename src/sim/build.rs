@@ -9,7 +9,7 @@ use crate::bodies::{
     Body, BodyKind, BodyShape, ContactPoints, ContactState, FreeMotion, GridPatch, Hydro, Material,
     PreviousVelocity, RigidState, angular3, band, vec3,
 };
-use crate::scene::Scene;
+use crate::scene::{Scene, ValidScene};
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DQuat, DVec3};
 
@@ -56,17 +56,12 @@ pub fn contact_params(scene: &Scene, h: f64) -> ContactParams {
     }
 }
 
-/// Spawn the scene's bodies into `world`; errors name the body.
-pub fn spawn_bodies(world: &mut World, scene: &Scene, grid: &Grid) -> anyhow::Result<usize> {
+/// Spawn the scene's bodies into `world` (their shapes were built when the scene was checked);
+/// returns how many.
+pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyhow::Result<usize> {
     let rho_f = scene.fluid.density;
-    for (id, spec) in scene.bodies.iter().enumerate() {
-        let geom = spec.shape.build(&scene.base_dir).map_err(|e| {
-            anyhow::anyhow!(
-                "scene error in body `{}` (bodies[{id}].shape): {e}",
-                spec.name
-            )
-        })?;
-        let level_set = LocalLevelSet::new(geom, grid.h, band(grid), grid.dim);
+    for (id, (spec, geom)) in scene.bodies.iter().zip(scene.geometries()).enumerate() {
+        let level_set = LocalLevelSet::new(geom.clone(), grid.h, band(grid), grid.dim);
         let eps = scene.contact.eps.unwrap_or(grid.h);
         // Quadrature lattice: half a cell in 2D; in 3D a whole cell (8 times fewer points, the
         // cost of dense piles; the points being material, the force stays conservative).
