@@ -9,12 +9,12 @@ use crate::bodies::{
     Body, BodyKind, BodyShape, ContactPoints, ContactState, FreeMotion, GridPatch, Hydro, Material,
     PreviousVelocity, RigidState, angular3, band, vec3,
 };
-use crate::scene::{Scene, ValidScene};
+use crate::scene::ValidScene;
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DQuat, DVec3};
 
-/// Parameters of a (validated) scene.
-pub fn params(scene: &Scene) -> Params {
+/// Parameters of a validated scene.
+pub fn params(scene: &ValidScene) -> Params {
     Params {
         nu: scene.fluid.viscosity,
         rho_fluid: scene.fluid.density,
@@ -36,7 +36,7 @@ pub fn params(scene: &Scene) -> Params {
 }
 
 /// The contact parameters of a validated scene on grid spacing `h`.
-pub fn contact_params(scene: &Scene, h: f64) -> ContactParams {
+pub fn contact_params(scene: &ValidScene, h: f64) -> ContactParams {
     let id = |n: &str| scene.bodies.iter().position(|b| b.name == n);
     let mut pairs: Vec<(usize, usize, f64)> = scene
         .contact

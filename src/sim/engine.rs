@@ -20,8 +20,8 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// Set up the world for a validated scene (the only kind there is, see [`ValidScene`]): fields from the initial conditions, velocity
-    /// from the Poisson solve, first time step. Fails if the schedule cannot be built or the
+    /// Set up the world for a validated scene (the only kind there is, see [`ValidScene`]):
+    /// fields from the initial conditions, velocity from the Poisson solve, first time step. Fails if the schedule cannot be built or the
     /// initial state is not finite.
     pub fn new(scene: ValidScene) -> anyhow::Result<Self> {
         let grid = scene.grid();
