@@ -66,7 +66,10 @@ pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)
 /// A scene's name names its run directory `runs/<name>`: one plain path component.
 fn check_name(name: &str) -> Check {
     if name.is_empty() {
-        return fail(&[], "must not be empty");
+        return fail(
+            &[],
+            "must not be empty: give the scene a `name: \"...\"` (it names the run directory)",
+        );
     }
     if name == "." || name == ".." {
         return fail(
