@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use tumble::io::output::peak_memory_bytes;
 use tumble::run::{RunOptions, run_scene};
-use tumble::scene::{Scene, SceneError};
+use tumble::scene::{Scene, SceneError, ValidScene};
 use tumble::sim::engine::Simulation;
 use tumble::validate::{CASES, run_case};
 
@@ -265,7 +265,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn load(path: &std::path::Path) -> Result<Scene, ExitCode> {
+fn load(path: &std::path::Path) -> Result<ValidScene, ExitCode> {
     Scene::load(path).map_err(|e: SceneError| {
         eprintln!("error: {e}");
         ExitCode::from(2)
@@ -287,9 +287,9 @@ fn median_p90(v: &mut [f64]) -> (f64, f64) {
     (med, p90)
 }
 
-fn bench(mut scene: Scene, steps: usize, warmup: usize) -> anyhow::Result<String> {
+fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<String> {
     anyhow::ensure!(steps > 0, "--steps must be at least 1");
-    scene.numerics.end_time = f64::MAX / 4.0;
+    let scene = scene.edit(|s| s.numerics.end_time = f64::MAX / 4.0)?;
     let name = scene.name.clone();
     let mut sim = Simulation::new(scene)?;
     sim.set_stop_at(None);

@@ -6,7 +6,7 @@ use crate::io::checkpoint::{self, Checkpoint, CheckpointError, Interrupted, RunP
 use crate::io::output::{CsvWriter, atomic_write};
 use crate::io::runlog::RunLog;
 use crate::io::snapshots::Snapshots;
-use crate::scene::Scene;
+use crate::scene::{Scene, ValidScene};
 use crate::sim::engine::Simulation;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -99,22 +99,30 @@ pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> 
 }
 
 /// Apply the command line's end time and checkpoint interval to `scene`.
-fn apply_overrides(scene: &mut Scene, opts: &RunOptions) -> anyhow::Result<()> {
+fn apply_overrides(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<ValidScene> {
     if let Some(t) = opts.until {
         anyhow::ensure!(
             t.is_finite() && t > 0.0,
             "--until must be a positive time, got {t}"
         );
-        scene.numerics.end_time = t;
     }
     if let Some(c) = opts.checkpoint_every {
         anyhow::ensure!(
             c.is_finite() && c > 0.0,
             "--checkpoint-every must be a positive time, got {c}"
         );
-        scene.output.checkpoint_every = Some(c);
     }
-    Ok(())
+    if opts.until.is_none() && opts.checkpoint_every.is_none() {
+        return Ok(scene);
+    }
+    Ok(scene.edit(|scene| {
+        if let Some(t) = opts.until {
+            scene.numerics.end_time = t;
+        }
+        if let Some(c) = opts.checkpoint_every {
+            scene.output.checkpoint_every = Some(c);
+        }
+    })?)
 }
 
 /// Log an error that ends a run (an interruption is logged where it happens, as a warning).
@@ -141,15 +149,15 @@ struct Run {
 }
 
 /// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
-pub fn run_scene(mut scene: Scene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
-    apply_overrides(&mut scene, opts)?;
+pub fn run_scene(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+    let scene = apply_overrides(scene, opts)?;
     let dir = prepare_dir(&scene, opts)?;
     let _log = RunLog::create(&dir.join("log.txt"))?;
     start_run(scene, opts, dir).inspect_err(log_error)
 }
 
 /// [`run_scene`] once the run directory and its log are set up.
-fn start_run(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<RunSummary> {
+fn start_run(scene: ValidScene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
     let grid = scene.grid();
     tracing::info!(
@@ -214,12 +222,12 @@ fn start_run(scene: Scene, opts: &RunOptions, dir: PathBuf) -> anyhow::Result<Ru
 /// snapshots kept, `series.h5` to the checkpoint's steps.
 pub fn restart_run(
     checkpoint: &Path,
-    scene: Option<(&Path, Scene)>,
+    scene: Option<(&Path, ValidScene)>,
     opts: &RunOptions,
 ) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
     let ck = Checkpoint::load(checkpoint)?;
-    let mut run_scene = ck.scene()?;
+    let run_scene = ck.scene()?;
     if let Some((file, given)) = &scene
         && !checkpoint::same_run(given, &run_scene)
     {
@@ -238,7 +246,8 @@ pub fn restart_run(
     };
     let scene_file = dir.join("scene.ron");
     if let Ok(text) = std::fs::read_to_string(&scene_file) {
-        let same = Scene::parse(&text, &scene_file.display().to_string(), "")
+        let file = scene_file.display().to_string();
+        let same = Scene::parse_in(&text, &file, "", &run_scene.base_dir)
             .is_ok_and(|s| checkpoint::same_run(&s, &run_scene));
         if !same {
             return Err(ck
@@ -250,7 +259,7 @@ pub fn restart_run(
                 .into());
         }
     }
-    apply_overrides(&mut run_scene, opts)?;
+    let run_scene = apply_overrides(run_scene, opts)?;
     let (t0, step0) = (ck.time.t, ck.time.step);
     let end = run_scene.numerics.end_time;
     if opts.until.is_some() && end <= t0 {

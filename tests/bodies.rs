@@ -9,8 +9,8 @@ use tumble::scene::Scene;
 use tumble::sim::engine::Simulation;
 
 fn sim(text: &str) -> Simulation {
-    let mut scene = Scene::parse(text, "test", "test").unwrap_or_else(|e| panic!("{e}"));
-    scene.base_dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let scene = Scene::parse_in(text, "test", "test", &dir).unwrap_or_else(|e| panic!("{e}"));
     Simulation::new(scene).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -231,10 +231,10 @@ fn non_positive_density_and_size_are_rejected() {
         "b",
     )
     .unwrap_err();
-    assert_eq!(e.field.as_deref(), Some("bodies.density"), "{e}");
+    assert_eq!(e.field.as_deref(), Some("bodies[0].density"), "{e}");
     assert_eq!(e.line, Some(3));
     let e = Scene::parse(&base.replace("radius: 0.1", "radius: 0.0"), "bad.ron", "b").unwrap_err();
-    assert_eq!(e.field.as_deref(), Some("bodies.shape"), "{e}");
+    assert_eq!(e.field.as_deref(), Some("bodies[0].shape"), "{e}");
 }
 
 #[test]
@@ -243,8 +243,8 @@ fn missing_mesh_file_names_the_body() {
         domain: (extent: [1.0, 1.0, 1.0], cells: [16, 16, 16]),
         bodies: [(name: "cup", shape: Mesh(file: "no/such.obj"), position: [0.5, 0.5, 0.5])],
     )"#;
-    let scene = Scene::parse(text, "s.ron", "s").unwrap();
-    let e = Simulation::new(scene).err().expect("must fail").to_string();
+    // The mesh is read when the scene is loaded: a missing one is a scene error.
+    let e = Scene::parse(text, "s.ron", "s").unwrap_err().to_string();
     assert!(e.contains("cup") && e.contains("not found"), "{e}");
 }
 

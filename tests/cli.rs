@@ -349,7 +349,7 @@ fn overlapping_bodies_exit_2_naming_line_and_bodies() {
             one_paragraph(&msg);
             assert!(msg.contains(scene.to_str().unwrap()), "{msg}");
             assert!(msg.contains(line), "{msg}");
-            assert!(msg.contains("bodies.position"), "{msg}");
+            assert!(msg.contains("bodies[1].position"), "{msg}");
             assert!(msg.contains("overlap"), "{msg}");
             for n in names {
                 assert!(msg.contains(&format!("`{n}`")), "{msg}");

@@ -11,7 +11,7 @@ fn every_bundled_scene_loads_and_steps() {
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "ron") {
-            let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
             // One step at a small size: the scene's setup works end to end. Coarsen h by the
             // largest whole factor that keeps every extent a whole number (≥ 8) of cells.
             let h0 = scene.grid().h;
@@ -24,8 +24,12 @@ fn every_bundled_scene_loads_and_steps() {
                     })
                 })
                 .unwrap_or(1);
-            scene.domain.cells = None;
-            scene.domain.h = Some(h0 * m as f64);
+            let scene = scene
+                .edit(|s| {
+                    s.domain.cells = None;
+                    s.domain.h = Some(h0 * m as f64);
+                })
+                .unwrap_or_else(|e| panic!("{e}"));
             let mut sim =
                 Simulation::new(scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             sim.step().unwrap();
@@ -195,4 +199,166 @@ fn output_formats_default_to_vtk_and_hdf5_needs_the_feature() {
         "    output: (formats: [Vtk, Netcdf]),\n    numerics: (",
     ));
     assert!(e.message.contains("Netcdf"), "{e}");
+}
+
+/// A scene with two entries in each list (lines numbered in the comments), to check that an
+/// error in the second entry points at the second entry.
+const LISTS: &str = r#"Scene(
+    name: "lists",
+    domain: (extent: [2.0, 2.0], cells: [32, 32]),
+    initial: [
+        LambOseen(center: [0.5, 0.5], circulation: 1.0, core_radius: 0.1),
+        LambOseen(
+            center: [1.5, 1.5],
+            circulation: 1.0,
+            core_radius: 0.1,
+        ),
+    ],
+    bodies: [
+        (name: "a", shape: Disk(radius: 0.1), density: 2.0, position: [0.5, 1.5]),
+        (
+            name: "b",
+            shape: Disk(radius: 0.1),
+            density: 2.0,
+            position: [1.5, 0.5],
+        ),
+    ],
+    contact: (pairs: [
+        (bodies: ("a", "b"), kappa: 1.0),
+        (bodies: ("b", "a"),
+         kappa: 2.0),
+    ]),
+)"#;
+
+#[test]
+fn list_scene_is_valid() {
+    let s = Scene::parse(LISTS, "lists.ron", "lists").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((s.initial.len(), s.bodies.len()), (2, 2));
+}
+
+#[test]
+fn error_in_second_initial_entry_points_at_it() {
+    // Line 9 is the second entry's core_radius; line 5 would be the first entry's.
+    let e = err(&LISTS.replace("core_radius: 0.1,\n", "core_radius: -0.1,\n"));
+    assert_eq!(e.field.as_deref(), Some("initial[1].core_radius"), "{e}");
+    assert_eq!(e.line, Some(9), "{e}");
+    // The first entry is found as well (line 5).
+    let e = err(&LISTS.replace(
+        "circulation: 1.0, core_radius: 0.1)",
+        "circulation: 1.0, core_radius: 0.0)",
+    ));
+    assert_eq!(e.field.as_deref(), Some("initial[0].core_radius"), "{e}");
+    assert_eq!(e.line, Some(5), "{e}");
+}
+
+#[test]
+fn error_in_second_body_points_at_it() {
+    // The second body's density is on line 17, its position on line 18.
+    let e = err(&LISTS.replace("density: 2.0,\n", "density: -2.0,\n"));
+    assert_eq!(e.field.as_deref(), Some("bodies[1].density"), "{e}");
+    assert_eq!(e.line, Some(17), "{e}");
+    assert!(e.message.contains("`b`"), "{e}");
+    let e = err(&LISTS.replace("position: [1.5, 0.5]", "position: [1.5]"));
+    assert_eq!(e.field.as_deref(), Some("bodies[1].position"), "{e}");
+    assert_eq!(e.line, Some(18), "{e}");
+    // Overlapping bodies name the later one, at its position (line 18).
+    let e = err(&LISTS.replace("position: [1.5, 0.5]", "position: [0.55, 1.5]"));
+    assert_eq!(e.field.as_deref(), Some("bodies[1].position"), "{e}");
+    assert_eq!(e.line, Some(18), "{e}");
+    assert!(e.message.contains("overlap"), "{e}");
+}
+
+#[test]
+fn error_in_second_contact_pair_points_at_it() {
+    // The second pair's kappa is on line 24, its names on line 23.
+    let e = err(&LISTS.replace("kappa: 2.0", "kappa: -2.0"));
+    assert_eq!(e.field.as_deref(), Some("contact.pairs[1].kappa"), "{e}");
+    assert_eq!(e.line, Some(24), "{e}");
+    let e = err(&LISTS.replace("(\"b\", \"a\")", "(\"b\", \"c\")"));
+    assert_eq!(e.field.as_deref(), Some("contact.pairs[1].bodies"), "{e}");
+    assert_eq!(e.line, Some(23), "{e}");
+}
+
+#[test]
+fn wrong_type_names_the_field() {
+    // Issue 15: `end_time: "0.01"` said only `line 5: Expected float (column 43)`.
+    let text = r#"Scene(domain: (extent: [1.0, 1.0], cells: [16, 16]),
+    numerics: (dt: Fixed(0.01), end_time: "0.01"))"#;
+    let e = err(text);
+    assert_eq!(e.field.as_deref(), Some("numerics.end_time"), "{e}");
+    assert_eq!(e.line, Some(2), "{e}");
+    assert!(e.to_string().contains("field `numerics.end_time`"), "{e}");
+    // Inside a list entry, the entry is named.
+    let e = err(&LISTS.replace("circulation: 1.0,\n", "circulation: \"one\",\n"));
+    assert_eq!(e.field.as_deref(), Some("initial[1].circulation"), "{e}");
+    assert_eq!(e.line, Some(8), "{e}");
+    // And in a body's shape.
+    let e = err(&LISTS.replace(
+        "shape: Disk(radius: 0.1),\n",
+        "shape: Disk(radius: [0.1]),\n",
+    ));
+    assert_eq!(e.field.as_deref(), Some("bodies[1].shape.radius"), "{e}");
+}
+
+#[test]
+fn name_must_be_plain() {
+    for bad in ["../x", "/", ".", "..", "a/b", "a\\\\b"] {
+        let e = err(&GOOD.replace("name: \"t\"", &format!("name: \"{bad}\"")));
+        assert_eq!(e.field.as_deref(), Some("name"), "{bad}: {e}");
+        assert_eq!(e.line, Some(2), "{bad}: {e}");
+        assert!(e.message.contains("plain name"), "{bad}: {e}");
+    }
+    // No name and no file name to default to.
+    let text = GOOD.replace("    name: \"t\",\n", "");
+    let e = Scene::parse(&text, "<scene>", "").unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("name"), "{e}");
+    // The same check guards a scene changed in code.
+    let s = Scene::parse(GOOD, "good.ron", "good").unwrap();
+    let e = s.edit(|s| s.name = "../up".into()).unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("name"), "{e}");
+}
+
+#[test]
+fn scene_named_up_is_rejected_at_load() {
+    let dir = std::env::temp_dir().join(format!("tumble-scene-name-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("up.ron");
+    std::fs::write(&path, GOOD.replace("name: \"t\"", "name: \"../x\"")).unwrap();
+    let e = Scene::load(&path).unwrap_err();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(e.field.as_deref(), Some("name"), "{e}");
+    assert!(e.to_string().contains("up.ron"), "{e}");
+}
+
+#[test]
+fn edit_checks_again() {
+    let s = Scene::parse(GOOD, "good.ron", "good").unwrap();
+    let s = s.edit(|s| s.domain.cells = Some(vec![32, 32])).unwrap();
+    assert_eq!(s.grid().n, [32, 32, 1]);
+    assert_eq!(s.grid().h, 1.0 / 32.0);
+    let e = s.edit(|s| s.domain.cells = Some(vec![32, 16])).unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("domain.cells"), "{e}");
+    assert_eq!(e.file, "good.ron");
+}
+
+#[test]
+fn leftover_numerics_live_under_experimental() {
+    use tumble::scene::RemeshKernel;
+    // The old top-level keys are gone: the error names the unknown field.
+    let e = err(&GOOD.replace("end_time: 1.0,", "end_time: 1.0, midpoint_velocity: false,"));
+    assert!(e.message.contains("midpoint_velocity"), "{e}");
+    let text = GOOD.replace(
+        "end_time: 1.0,",
+        "end_time: 1.0, experimental: (midpoint_velocity: false, remesh_kernel: Lambda42),",
+    );
+    let s = Scene::parse(&text, "x.ron", "x").unwrap_or_else(|e| panic!("{e}"));
+    let x = &s.numerics.experimental;
+    assert!(!x.midpoint_velocity);
+    assert_eq!(x.remesh_kernel, RemeshKernel::Lambda42);
+    // Written back when set, left out at the defaults.
+    assert!(s.to_ron().contains("experimental"));
+    let d = Scene::parse(GOOD, "good.ron", "good").unwrap();
+    assert!(d.numerics.experimental.midpoint_velocity);
+    assert_eq!(d.numerics.experimental.remesh_kernel, RemeshKernel::M4Prime);
+    assert!(!d.to_ron().contains("experimental"), "{}", d.to_ron());
 }

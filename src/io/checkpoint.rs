@@ -39,7 +39,7 @@
 use crate::base::fields::{Fields, Sample, SimTime};
 use crate::bodies::{Body, ContactState, FreeMotion, Hydro, PreviousVelocity, RigidState};
 use crate::io::output::atomic_write_with;
-use crate::scene::Scene;
+use crate::scene::{Scene, ValidScene};
 use crate::sim::engine::Simulation;
 use crate::solvers::spectral::Spectral;
 use crate::systems::diagnostics::Diagnostics;
@@ -533,16 +533,19 @@ impl Checkpoint {
     }
 
     /// The scene the checkpoint was written with (its mesh paths resolved as in the run).
-    pub fn scene(&self) -> Result<Scene, CheckpointError> {
-        let mut s = Scene::parse(&self.scene_ron, &self.file.display().to_string(), "")
-            .map_err(|e| self.error(format!("its scene does not load: {e}")))?;
-        s.base_dir = self.base_dir.clone();
-        Ok(s)
+    pub fn scene(&self) -> Result<ValidScene, CheckpointError> {
+        Scene::parse_in(
+            &self.scene_ron,
+            &self.file.display().to_string(),
+            "",
+            &self.base_dir,
+        )
+        .map_err(|e| self.error(format!("its scene does not load: {e}")))
     }
 
     /// A simulation of `scene` (the checkpoint's, possibly with another end time or
     /// checkpoint interval) in the checkpoint's state.
-    pub fn simulation(&self, scene: Scene) -> anyhow::Result<Simulation> {
+    pub fn simulation(&self, scene: ValidScene) -> anyhow::Result<Simulation> {
         let mut sim = Simulation::new(scene)?;
         self.restore(&mut sim)?;
         Ok(sim)

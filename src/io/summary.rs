@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::base::params::TimeStep;
-use crate::scene::{BodyKind, FieldName, OutputFormat, Scene};
+use crate::scene::{BodyKind, FieldName, OutputFormat, ValidScene};
 
 /// Bytes per grid cell a 3D run holds (fields, particles, FFT scratch), measured by `tumble
 /// bench` on `taylor-green-3d` at 128^3 (130 B per cell); 2D runs hold about half as many
@@ -69,7 +69,7 @@ pub fn time_step_words(dt: &TimeStep, has_bodies: bool) -> String {
 }
 
 /// The summary `tumble check` prints, one line per topic.
-pub fn describe(scene: &Scene) -> String {
+pub fn describe(scene: &ValidScene) -> String {
     let g = scene.grid();
     let cells = g.len();
     let mut s = String::new();

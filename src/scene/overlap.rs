@@ -6,8 +6,10 @@
 //! A pair overlaps if some point lies more than half a cell inside both (bodies that touch
 //! or sit within the contact range are fine).
 
+use crate::base::grid::Grid;
+use crate::bodies::BodyKind;
 use crate::bodies::shapes::ShapeGeometry;
-use crate::scene::{BodyKind, Scene};
+use crate::scene::Scene;
 use glam::{DQuat, DVec3};
 
 /// The most lattice points sampled per pair (the lattice is coarsened beyond).
@@ -41,9 +43,8 @@ impl Placed<'_> {
 }
 
 /// The first pair of bodies (with a dynamic one) that overlap by more than half a cell, if
-/// any. `geoms` are the scene's bodies' built shapes, in order. The scene must be validated.
-pub fn initial_overlap(scene: &Scene, geoms: &[ShapeGeometry]) -> Option<Overlap> {
-    let grid = scene.grid();
+/// any. `geoms` are the scene's bodies' built shapes, in order; `grid` is the scene's.
+pub fn initial_overlap(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> Option<Overlap> {
     let dim = grid.dim;
     let h = grid.h;
     let placed: Vec<Placed> = scene

@@ -9,12 +9,12 @@ use crate::bodies::{
     Body, BodyKind, BodyShape, ContactPoints, ContactState, FreeMotion, GridPatch, Hydro, Material,
     PreviousVelocity, RigidState, angular3, band, vec3,
 };
-use crate::scene::Scene;
+use crate::scene::ValidScene;
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DQuat, DVec3};
 
-/// Parameters of a (validated) scene.
-pub fn params(scene: &Scene) -> Params {
+/// Parameters of a validated scene.
+pub fn params(scene: &ValidScene) -> Params {
     Params {
         nu: scene.fluid.viscosity,
         rho_fluid: scene.fluid.density,
@@ -23,8 +23,8 @@ pub fn params(scene: &Scene) -> Params {
         dt_policy: scene.numerics.dt.clone(),
         remesh_cutoff: scene.numerics.remesh_cutoff,
         blowup_factor: scene.numerics.blowup_factor,
-        midpoint_velocity: scene.numerics.midpoint_velocity,
-        remesh_kernel: scene.numerics.remesh_kernel,
+        midpoint_velocity: scene.numerics.experimental.midpoint_velocity,
+        remesh_kernel: scene.numerics.experimental.remesh_kernel,
         lambda: scene.numerics.lambda,
         interface_cells: scene.numerics.interface_cells,
         penalization_offset: scene.numerics.penalization_offset,
@@ -36,7 +36,7 @@ pub fn params(scene: &Scene) -> Params {
 }
 
 /// The contact parameters of a validated scene on grid spacing `h`.
-pub fn contact_params(scene: &Scene, h: f64) -> ContactParams {
+pub fn contact_params(scene: &ValidScene, h: f64) -> ContactParams {
     let id = |n: &str| scene.bodies.iter().position(|b| b.name == n);
     let mut pairs: Vec<(usize, usize, f64)> = scene
         .contact
@@ -56,17 +56,12 @@ pub fn contact_params(scene: &Scene, h: f64) -> ContactParams {
     }
 }
 
-/// Spawn the scene's bodies into `world`; errors name the body.
-pub fn spawn_bodies(world: &mut World, scene: &Scene, grid: &Grid) -> anyhow::Result<usize> {
+/// Spawn the scene's bodies into `world` (their shapes were built when the scene was checked);
+/// returns how many.
+pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyhow::Result<usize> {
     let rho_f = scene.fluid.density;
-    for (id, spec) in scene.bodies.iter().enumerate() {
-        let geom = spec.shape.build(&scene.base_dir).map_err(|e| {
-            anyhow::anyhow!(
-                "scene error in body `{}` (bodies[{id}].shape): {e}",
-                spec.name
-            )
-        })?;
-        let level_set = LocalLevelSet::new(geom, grid.h, band(grid), grid.dim);
+    for (id, (spec, geom)) in scene.bodies.iter().zip(scene.geometries()).enumerate() {
+        let level_set = LocalLevelSet::new(geom.clone(), grid.h, band(grid), grid.dim);
         let eps = scene.contact.eps.unwrap_or(grid.h);
         // Quadrature lattice: half a cell in 2D; in 3D a whole cell (8 times fewer points, the
         // cost of dense piles; the points being material, the force stays conservative).

@@ -2,7 +2,7 @@
 
 use crate::base::fields::{Fields, Params, Sample, SimTime, Timings};
 use crate::base::grid::Grid;
-use crate::scene::Scene;
+use crate::scene::ValidScene;
 use crate::sim::init::add_initial;
 use crate::sim::schedule::{startup_schedule, step_schedule_with, vacuum_schedule};
 use crate::solvers::spectral::Spectral;
@@ -16,14 +16,14 @@ pub struct Simulation {
     pub world: World,
     /// The step schedule: add your own systems to it (see [`crate::sim::schedule`]).
     pub schedule: Schedule,
-    scene: Scene,
+    scene: ValidScene,
 }
 
 impl Simulation {
-    /// Set up the world for a validated scene: fields from the initial conditions, velocity
-    /// from the Poisson solve, first time step. Fails if the schedule cannot be built or the
+    /// Set up the world for a validated scene (the only kind there is, see [`ValidScene`]):
+    /// fields from the initial conditions, velocity from the Poisson solve, first time step. Fails if the schedule cannot be built or the
     /// initial state is not finite.
-    pub fn new(scene: Scene) -> anyhow::Result<Self> {
+    pub fn new(scene: ValidScene) -> anyhow::Result<Self> {
         let grid = scene.grid();
         let mut world = World::new();
         let mut fields = Fields::new(&grid);
@@ -124,7 +124,7 @@ impl Simulation {
     }
 
     /// The scene being run.
-    pub fn scene(&self) -> &Scene {
+    pub fn scene(&self) -> &ValidScene {
         &self.scene
     }
 

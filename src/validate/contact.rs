@@ -347,8 +347,10 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
     let mut scene = bundled_scene("tank-200-vacuum.ron")?;
     if quick {
         // The first 50 spheres (the two bottom layers and a part of the third) for 0.5.
-        scene.bodies.truncate(51);
-        scene.numerics.end_time = 0.5;
+        scene = scene.edit(|s| {
+            s.bodies.truncate(51);
+            s.numerics.end_time = 0.5;
+        })?;
     }
     let g = DVec3::from_array(scene.gravity());
     let h = scene.grid().h;
@@ -408,8 +410,10 @@ pub fn tank_pile(quick: bool) -> anyhow::Result<Report> {
     let mut rep = Report::new("tank-pile");
     let mut scene = bundled_scene("tank-200.ron")?;
     if quick {
-        scene.bodies.truncate(37);
-        scene.numerics.end_time = 1.5;
+        scene = scene.edit(|s| {
+            s.bodies.truncate(37);
+            s.numerics.end_time = 1.5;
+        })?;
     }
     let g = DVec3::from_array(scene.gravity()).length();
     let h = scene.grid().h;

@@ -10,7 +10,7 @@
 
 use crate::base::grid::Grid;
 use crate::io::plot::{Series, Style, line_chart};
-use crate::scene::{RemeshKernel, Scene};
+use crate::scene::{RemeshKernel, Scene, ValidScene};
 use crate::sim::engine::Simulation;
 use crate::solvers::spectral::Spectral;
 use crate::systems::transport::{LineScratch, sweep};
@@ -80,13 +80,19 @@ pub const SCENES: &[(&str, &str)] = &[
 ];
 
 /// A bundled scene by file name.
-pub fn bundled_scene(file: &str) -> anyhow::Result<Scene> {
+pub fn bundled_scene(file: &str) -> anyhow::Result<ValidScene> {
     let (_, text) = SCENES
         .iter()
         .find(|(f, _)| *f == file)
         .ok_or_else(|| anyhow::anyhow!("no bundled scene {file}"))?;
     let stem = file.trim_end_matches(".ron");
-    Ok(Scene::parse(text, &format!("scenes/{file}"), stem)?)
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    Ok(Scene::parse_in(
+        text,
+        &format!("scenes/{file}"),
+        stem,
+        &dir,
+    )?)
 }
 
 /// One checked quantity.
@@ -672,7 +678,7 @@ fn lamb_oseen(quick: bool) -> anyhow::Result<Report> {
 fn taylor_green_2d(quick: bool) -> anyhow::Result<Report> {
     let mut scene = bundled_scene("taylor-green-2d.ron")?;
     if quick {
-        scene.domain.cells = Some(vec![64, 64]);
+        scene = scene.edit(|s| s.domain.cells = Some(vec![64, 64]))?;
     }
     let k = match &scene.initial[0] {
         crate::scene::InitialVorticity::TaylorGreen2d { wavenumber, .. } => *wavenumber,
@@ -737,8 +743,8 @@ fn taylor_green_3d(quick: bool) -> anyhow::Result<Report> {
     let sizes: &[usize] = if quick { &[48] } else { &[64, 128] };
     let mut plot = PlotSpec::new("energy", "kinetic energy, Re = 1600", "t", "E(t)");
     for &n in sizes {
-        let mut scene = bundled_scene("taylor-green-3d.ron")?;
-        scene.domain.cells = Some(vec![n, n, n]);
+        let scene =
+            bundled_scene("taylor-green-3d.ron")?.edit(|s| s.domain.cells = Some(vec![n, n, n]))?;
         let mut sim = Simulation::new(scene)?;
         let e0 = sim.sample().energy;
         let start = std::time::Instant::now();
@@ -800,14 +806,15 @@ struct Sedimentation {
 
 /// One sedimentation-2d run at spacing `h`, step `dt` and contact strength `kappa`.
 fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentation> {
-    let mut scene = bundled_scene("sedimentation-2d.ron")?;
     let wall = 8.0 * h;
-    scene.domain.origin = Some(vec![-wall, -wall]);
-    scene.domain.extent = vec![2.0 + 2.0 * wall, 6.0 + 2.0 * wall];
-    scene.domain.h = Some(h);
-    scene.domain.cells = None;
-    scene.numerics.dt = crate::scene::TimeStep::Fixed(dt);
-    scene.contact.kappa = kappa;
+    let scene = bundled_scene("sedimentation-2d.ron")?.edit(|scene| {
+        scene.domain.origin = Some(vec![-wall, -wall]);
+        scene.domain.extent = vec![2.0 + 2.0 * wall, 6.0 + 2.0 * wall];
+        scene.domain.h = Some(h);
+        scene.domain.cells = None;
+        scene.numerics.dt = crate::scene::TimeStep::Fixed(dt);
+        scene.contact.kappa = kappa;
+    })?;
     let r = 0.125;
     let mut sim = Simulation::new(scene)?;
     let mut out = Sedimentation {
@@ -1131,39 +1138,40 @@ fn settling_run_dt(
     mesh: Option<&str>,
     diffusion_dt: bool,
 ) -> anyhow::Result<(f64, Vec<(f64, f64)>)> {
-    let mut scene = bundled_scene("sphere-settling.ron")?;
-    if let (true, crate::scene::TimeStep::Adaptive { dt_max, .. }) =
-        (diffusion_dt, &mut scene.numerics.dt)
-    {
-        *dt_max = None;
-    }
-    scene.base_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let wall = 2.0 * h;
-    scene.domain.origin = Some(vec![-wall, -wall, 0.0]);
-    scene.domain.extent = vec![1.0 + 2.0 * wall, 1.0 + 2.0 * wall, 4.0];
-    scene.domain.h = Some(h);
-    scene.domain.cells = None;
-    scene.fluid.viscosity = nu;
-    for b in &mut scene.bodies {
-        match &mut b.shape {
-            crate::bodies::shapes::Shape::Sphere { radius } => {
-                *radius = 0.5 * d;
-                if let Some(file) = mesh {
-                    b.shape = crate::bodies::shapes::Shape::Mesh {
-                        file: file.to_string(),
-                        scale: 1.0,
-                    };
-                }
-            }
-            crate::bodies::shapes::Shape::Complement(inner) => {
-                **inner = crate::bodies::shapes::Shape::Cylinder {
-                    radius: 0.5,
-                    half_height: 2.0 - wall,
-                }
-            }
-            _ => {}
+    let scene = bundled_scene("sphere-settling.ron")?.edit(|scene| {
+        if let (true, crate::scene::TimeStep::Adaptive { dt_max, .. }) =
+            (diffusion_dt, &mut scene.numerics.dt)
+        {
+            *dt_max = None;
         }
-    }
+        scene.base_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        scene.domain.origin = Some(vec![-wall, -wall, 0.0]);
+        scene.domain.extent = vec![1.0 + 2.0 * wall, 1.0 + 2.0 * wall, 4.0];
+        scene.domain.h = Some(h);
+        scene.domain.cells = None;
+        scene.fluid.viscosity = nu;
+        for b in &mut scene.bodies {
+            match &mut b.shape {
+                crate::bodies::shapes::Shape::Sphere { radius } => {
+                    *radius = 0.5 * d;
+                    if let Some(file) = mesh {
+                        b.shape = crate::bodies::shapes::Shape::Mesh {
+                            file: file.to_string(),
+                            scale: 1.0,
+                        };
+                    }
+                }
+                crate::bodies::shapes::Shape::Complement(inner) => {
+                    **inner = crate::bodies::shapes::Shape::Cylinder {
+                        radius: 0.5,
+                        half_height: 2.0 - wall,
+                    }
+                }
+                _ => {}
+            }
+        }
+    })?;
     let mut sim = Simulation::new(scene)?;
     let mut curve = Vec::new();
     sim.set_stop_at(Some(1.2));

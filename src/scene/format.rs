@@ -1,0 +1,413 @@
+//! The scene file format: the serde structs a RON scene deserialises into, each field with its
+//! unit and default. Nothing here checks values; [`crate::scene::check`] does, and only a
+//! [`crate::scene::ValidScene`] reaches the engine.
+
+use crate::base::params::{BodyCoupling, InterfaceAcceleration, RemeshKernel, TimeStep};
+use crate::bodies::BodyKind;
+use serde::{Deserialize, Serialize};
+
+/// A whole scene.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Name of the scene, used for the default output directory `runs/<name>`.
+    /// Default: the file name without extension.
+    #[serde(default)]
+    pub name: String,
+    /// The periodic computational box and its grid.
+    pub domain: Domain,
+    /// Fluid properties.
+    #[serde(default)]
+    pub fluid: Fluid,
+    /// Time stepping and particle parameters.
+    #[serde(default)]
+    pub numerics: Numerics,
+    /// Initial vorticity: the sum of these fields. Default: none (fluid at rest).
+    #[serde(default)]
+    pub initial: Vec<InitialVorticity>,
+    /// What is written and how often.
+    #[serde(default)]
+    pub output: Output,
+    /// Rigid bodies: dynamic (two-way coupled), kinematic (prescribed motion) and static
+    /// (walls, tanks). Default: none.
+    #[serde(default)]
+    pub bodies: Vec<BodySpec>,
+    /// Contact between bodies (the level-set collision model, eqs. 20-22).
+    #[serde(default)]
+    pub contact: Contact,
+    /// Vacuum mode: the flow solver is off and gravity and contact act on the bodies directly
+    /// (paper Fig. 1 and Fig. 9). Default: false.
+    #[serde(default)]
+    pub vacuum: bool,
+    /// Directory that relative mesh paths are resolved against (the scene file's).
+    #[serde(skip)]
+    pub base_dir: std::path::PathBuf,
+}
+
+/// A rigid body in the scene.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Name in outputs. Default: `body<index>`.
+    #[serde(default)]
+    pub name: String,
+    /// Shape in body coordinates (centred on the body's position).
+    pub shape: crate::bodies::shapes::Shape,
+    /// How it moves. Default: Dynamic.
+    #[serde(default = "default_kind")]
+    pub kind: BodyKind,
+    /// Density, mass per volume, > 0. Default: the fluid's density (neutrally buoyant).
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// Position of the body's centre, length units (one entry per axis).
+    pub position: Vec<f64>,
+    /// Initial orientation as a rotation vector (axis times angle, radians): 1 entry (angle
+    /// about z) in 2D, 3 in 3D. Default: no rotation.
+    #[serde(default)]
+    pub rotation: Vec<f64>,
+    /// Initial velocity of a dynamic body, length/time. Default: zero.
+    #[serde(default)]
+    pub velocity: Vec<f64>,
+    /// Initial angular velocity of a dynamic body (1 entry in 2D, 3 in 3D), rad/time.
+    /// Default: zero.
+    #[serde(default)]
+    pub angular_velocity: Vec<f64>,
+    /// This body's contact strength κ (velocity², ≥ 0): a pair of bodies uses the mean of
+    /// their two values unless `contact.pairs` names the pair. Default: `contact.kappa`.
+    #[serde(default)]
+    pub kappa: Option<f64>,
+}
+
+/// The level-set contact model (paper eqs. 20-22): on the inner band of body i, a force
+/// density ρ_i κ_ij/ε ζ(φ_i/ε) e^{-d/ε}/d pushing i away from body j along -∇φ_j, with
+/// d = -φ_j the distance to j.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Contact {
+    /// Default strength κ of the repulsion for every pair, velocity² (≥ 0; 0 turns contact
+    /// off). The paper uses 30 (2D disk on a wall), 25 (two spheres) and 5 (in vacuum).
+    /// Default: 25.
+    pub kappa: f64,
+    /// Range ε of the repulsion, length (> 0). Default: the grid spacing h.
+    pub eps: Option<f64>,
+    /// Distance beyond which the force is dropped, in units of ε (≥ 2; e^{-6}/6 ≈ 4e-4 of the
+    /// force at d = ε). Default: 6.
+    pub range: f64,
+    /// κ for named pairs of bodies, overriding the per-body values. Default: none.
+    pub pairs: Vec<ContactPair>,
+}
+
+impl Default for Contact {
+    fn default() -> Self {
+        Contact {
+            kappa: 25.0,
+            eps: None,
+            range: 6.0,
+            pairs: Vec::new(),
+        }
+    }
+}
+
+/// κ for one pair of bodies.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ContactPair {
+    /// The names of the two bodies.
+    pub bodies: (String, String),
+    /// Strength κ for this pair, velocity² (≥ 0).
+    pub kappa: f64,
+}
+
+fn default_kind() -> BodyKind {
+    BodyKind::Dynamic
+}
+
+/// The box `[origin, origin + extent)`, periodic, with a uniform grid of spacing `h`.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    /// Box size per axis, length units; two entries make a 2D scene, three a 3D one. Required.
+    pub extent: Vec<f64>,
+    /// Position of the box's lower corner, length units. Default: zeros.
+    #[serde(default)]
+    pub origin: Option<Vec<f64>>,
+    /// Number of cells (= nodes, the box is periodic) per axis. Give `cells` or `h`, not both.
+    #[serde(default)]
+    pub cells: Option<Vec<usize>>,
+    /// Grid spacing, length units; every extent must be a whole multiple of it.
+    #[serde(default)]
+    pub h: Option<f64>,
+}
+
+/// Fluid properties.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Fluid {
+    /// Density ρ_F, mass per volume. Default: 1.
+    pub density: f64,
+    /// Kinematic viscosity ν, length²/time, ≥ 0. Default: 0.001.
+    pub viscosity: f64,
+    /// Gravity vector g, length/time² (one entry per axis). Default: zeros.
+    pub gravity: Vec<f64>,
+    /// Uniform background velocity (the k = 0 mode of u), length/time. Default: zeros.
+    pub background_velocity: Vec<f64>,
+}
+
+impl Default for Fluid {
+    fn default() -> Self {
+        Fluid {
+            density: 1.0,
+            viscosity: 1e-3,
+            gravity: Vec::new(),
+            background_velocity: Vec::new(),
+        }
+    }
+}
+
+/// Time stepping and particle parameters.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Numerics {
+    /// Time step policy. Default: `Adaptive(c: 0.5)`.
+    pub dt: TimeStep,
+    /// Simulated time at which the run ends, time units, > 0. Default: 1.
+    pub end_time: f64,
+    /// Particle creation cutoff, relative to max|ω| (dimensionless, in [0, 1)): grid nodes with
+    /// |ω| at or below `remesh_cutoff * max|ω|` create no particle and keep their (small)
+    /// vorticity in place. Default: 1e-8.
+    pub remesh_cutoff: f64,
+    /// Stop the run as blown up when max|ω| exceeds this multiple of its initial value
+    /// (dimensionless). Default: 1e4.
+    pub blowup_factor: f64,
+    /// Penalization coefficient λ, 1/time, > 0 (implicit, so any value is stable). Default: 1e6.
+    pub lambda: f64,
+    /// Half-width of the smoothed Heaviside χ = H(φ), in cells (> 0). Default: 1.
+    pub interface_cells: f64,
+    /// Where the penalization mask of static and kinematic bodies (walls, obstacles) sits
+    /// relative to their surface, in cells: the mask is H_ε(φ - offset h), so with an offset
+    /// of one half-width the smoothed band lies inside the body and the rigid region does not
+    /// reach into the fluid (a fixed cylinder's drag then converges from the first grid).
+    /// Dynamic bodies always use the centred χ = H_ε(φ). In [0, 2 interface_cells].
+    /// Default: 0.
+    pub penalization_offset: f64,
+    /// How gravity and a dynamic body's own inertia reach the body. `Baroclinic` (default, the
+    /// paper's): gravity makes vorticity on the body's interface (eq. 28, in the form
+    /// `boussinesq` and `interface_acceleration` choose) and ū is the flow's mean over the body.
+    /// `Momentum`: the body's buoyancy (ρ_i - ρ_F) V g and the inertia of its mass beyond the
+    /// fluid's act on its rigid velocity directly, (M_w + (ρ_i - ρ_F) V) Δū = M_w (ũ - ū) +
+    /// (ρ_i - ρ_F) V g Δt, with ũ the mean of the flow over the region the penalization moves
+    /// and M_w that region's fluid mass; the flow carries the fluid's density everywhere, as
+    /// its vorticity equation (one ν = μ/ρ_F) assumes. `Momentum` settles at the right
+    /// velocity for any density and stays stable for heavy bodies, see [`BodyCoupling`].
+    /// Default: Baroclinic.
+    pub body_coupling: BodyCoupling,
+    /// Use the Boussinesq form of the baroclinic term, ∇ρ × g / ρ_F (eq. 18), instead of the
+    /// full form (eq. 28); with `body_coupling: Baroclinic`. Default: false.
+    pub boussinesq: bool,
+    /// The fluid acceleration Du/Dt on the bodies' interfaces in the baroclinic term (eq. 28):
+    /// `Rigid`, the acceleration of the body's rigid motion (no slip), or `Eulerian`, the grid
+    /// estimate ∂u/∂t + (u·∇)u from the last two velocity fields (the paper's); with
+    /// `body_coupling: Baroclinic`. Default: Rigid.
+    pub interface_acceleration: InterfaceAcceleration,
+    /// Unsupported numerical variants kept for experiments: no bundled scene, validation case
+    /// or test uses a non-default value, and they may be removed without notice. Written as
+    /// `numerics: (experimental: (midpoint_velocity: false))`. Default: every entry at its
+    /// default.
+    #[serde(skip_serializing_if = "Experimental::is_default")]
+    pub experimental: Experimental,
+}
+
+/// Unsupported numerical variants (`numerics.experimental`): may be removed; the defaults are
+/// what tumble is validated with.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Experimental {
+    /// Carry the particles (and stretch the vorticity) with the mid-step velocity
+    /// u^{n+1/2} = u^n + (Δt_n / 2Δt_{n-1}) (u^n - u^{n-1}) instead of the frozen u^n, which makes
+    /// the step second order in time; `false` gives a first-order step. Default: true.
+    pub midpoint_velocity: bool,
+    /// Interpolation and remeshing kernel: `M4Prime` (the paper's eq. 30) or `Lambda42`
+    /// (fourth order, 6 points per axis). Default: `M4Prime`.
+    pub remesh_kernel: RemeshKernel,
+}
+
+impl Default for Experimental {
+    fn default() -> Self {
+        Experimental {
+            midpoint_velocity: true,
+            remesh_kernel: RemeshKernel::M4Prime,
+        }
+    }
+}
+
+impl Experimental {
+    /// Whether every entry has its default (then it is not written back to RON).
+    pub fn is_default(&self) -> bool {
+        *self == Experimental::default()
+    }
+}
+
+impl Default for Numerics {
+    fn default() -> Self {
+        Numerics {
+            dt: TimeStep::default(),
+            end_time: 1.0,
+            remesh_cutoff: 1e-8,
+            blowup_factor: 1e4,
+            lambda: 1e6,
+            interface_cells: 1.0,
+            penalization_offset: 0.0,
+            body_coupling: BodyCoupling::Baroclinic,
+            boussinesq: false,
+            interface_acceleration: InterfaceAcceleration::Rigid,
+            experimental: Experimental::default(),
+        }
+    }
+}
+
+/// A named initial vorticity field. Positions are absolute coordinates.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum InitialVorticity {
+    /// 2D Lamb-Oseen vortex ω = Γ/(π σ²) exp(-r²/σ²) (nearest periodic image).
+    LambOseen {
+        /// Centre, length units (2 entries).
+        center: Vec<f64>,
+        /// Circulation Γ, length²/time.
+        circulation: f64,
+        /// Core radius σ, length units, > 0.
+        core_radius: f64,
+    },
+    /// 2D Taylor-Green vortex u = A sin(kx) cos(ky), v = -A cos(kx) sin(ky), so
+    /// ω = 2 A k sin(kx) sin(ky) (x, y measured from the box origin).
+    TaylorGreen2d {
+        /// Velocity amplitude A, length/time. Default: 1.
+        #[serde(default = "one")]
+        amplitude: f64,
+        /// Wavenumber k, 1/length. Default: 1.
+        #[serde(default = "one")]
+        wavenumber: f64,
+    },
+    /// 3D Taylor-Green vortex u = A sin(kx) cos(ky) cos(kz), v = -A cos(kx) sin(ky) cos(kz),
+    /// w = 0 (x, y, z measured from the box origin).
+    TaylorGreen3d {
+        /// Velocity amplitude A, length/time. Default: 1.
+        #[serde(default = "one")]
+        amplitude: f64,
+        /// Wavenumber k, 1/length. Default: 1.
+        #[serde(default = "one")]
+        wavenumber: f64,
+    },
+    /// 3D vortex ring with a Gaussian core: |ω| = Γ/(π σ²) exp(-ρ²/σ²), ρ the distance to the
+    /// ring's centre line, directed along the ring (right-handed about `axis`).
+    VortexRing {
+        /// Ring centre, length units (3 entries).
+        center: Vec<f64>,
+        /// Direction of the ring's axis (its self-induced motion), normalised on load.
+        axis: Vec<f64>,
+        /// Ring radius R, length units, > 0.
+        radius: f64,
+        /// Core radius σ, length units, > 0.
+        core_radius: f64,
+        /// Circulation Γ, length²/time.
+        circulation: f64,
+    },
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A field that can be written to snapshots.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FieldName {
+    /// Vorticity (scalar in 2D, vector in 3D).
+    Omega,
+    /// Velocity.
+    Velocity,
+    /// Density ρ (eq. 19), characteristic function Σχ and the union level set max φ_i
+    /// (written only when the scene has bodies).
+    Density,
+}
+
+/// What is written and how often.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Output {
+    /// Simulated time between field snapshots, time units; `None` writes only the first and
+    /// the last. Default: None.
+    pub every: Option<f64>,
+    /// Fields in each snapshot. Default: `[Omega, Velocity]`.
+    pub fields: Vec<FieldName>,
+    /// Output directory; `tumble run --out` overrides it. Default: `runs/<name>`.
+    pub dir: Option<String>,
+    /// File formats of the field snapshots: `Vtk` (`fields_NNNNNN.vti` + `fields.pvd`) and/or
+    /// `Hdf5` (`fields_NNNNNN.h5` + `fields.xmf`, and the body and contact series in
+    /// `series.h5`; needs a build with `--features hdf5`). At least one. Default: `[Vtk]`.
+    pub formats: Vec<OutputFormat>,
+    /// Simulated time between checkpoints (`checkpoint.bin` in the run directory, replaced
+    /// each time; `tumble run --restart` continues from it), time units; `tumble run
+    /// --checkpoint-every` overrides it. `None` writes a checkpoint only when the run is
+    /// interrupted (Ctrl-C, SIGTERM). Default: None.
+    pub checkpoint_every: Option<f64>,
+}
+
+/// A file format for field snapshots.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// VTK XML image data (`.vti`) indexed by a ParaView `.pvd` collection.
+    Vtk,
+    /// HDF5 (one `.h5` file per snapshot) indexed by an XDMF `.xmf` temporal collection, which
+    /// ParaView and VisIt open as one time series.
+    Hdf5,
+}
+
+impl Output {
+    /// Whether snapshots are written in `format`.
+    pub fn has_format(&self, format: OutputFormat) -> bool {
+        self.formats.contains(&format)
+    }
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            every: None,
+            fields: vec![FieldName::Omega, FieldName::Velocity, FieldName::Density],
+            dir: None,
+            formats: vec![OutputFormat::Vtk],
+            checkpoint_every: None,
+        }
+    }
+}
+
+impl Scene {
+    /// Serialise back to RON (the scene as run, written into the run directory).
+    pub fn to_ron(&self) -> String {
+        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default())
+            .unwrap_or_else(|e| format!("// could not serialise the scene: {e}\n"))
+    }
+
+    /// Number of space dimensions (2 or 3).
+    pub fn dim(&self) -> usize {
+        self.domain.extent.len()
+    }
+
+    /// Gravity as a 3-vector (zeros where not given).
+    pub fn gravity(&self) -> [f64; 3] {
+        pad3(&self.fluid.gravity)
+    }
+
+    /// Background velocity as a 3-vector.
+    pub fn background_velocity(&self) -> [f64; 3] {
+        pad3(&self.fluid.background_velocity)
+    }
+}
+
+fn pad3(v: &[f64]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (o, x) in out.iter_mut().zip(v) {
+        *o = *x;
+    }
+    out
+}

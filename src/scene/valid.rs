@@ -1,0 +1,121 @@
+//! [`ValidScene`]: a scene that passed every check. Reading a file ([`Scene::load`]), parsing
+//! text ([`Scene::parse`]) and changing a valid scene ([`ValidScene::edit`]) all end in the one
+//! check (`check_scene` in `check.rs`), and nothing else makes a `ValidScene`.
+
+use super::check::check_scene;
+use super::error::{SceneError, offset_of, path_at};
+use super::format::Scene;
+use crate::base::grid::Grid;
+use crate::bodies::shapes::ShapeGeometry;
+use std::path::Path;
+
+/// A scene whose values, meshes and initial placement have been checked, with its grid and
+/// its bodies' shapes. Read it as a [`Scene`] (it dereferences to one); change it with
+/// [`ValidScene::edit`].
+#[derive(Debug, Clone)]
+pub struct ValidScene {
+    scene: Scene,
+    grid: Grid,
+    geoms: Vec<ShapeGeometry>,
+    file: String,
+}
+
+impl std::ops::Deref for ValidScene {
+    type Target = Scene;
+    fn deref(&self) -> &Scene {
+        &self.scene
+    }
+}
+
+impl ValidScene {
+    /// The grid this scene runs on.
+    pub fn grid(&self) -> Grid {
+        self.grid.clone()
+    }
+
+    /// The bodies' shapes (meshes read), in the order of `bodies`.
+    pub fn geometries(&self) -> &[ShapeGeometry] {
+        &self.geoms
+    }
+
+    /// The file the scene was read from (as named in errors).
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+
+    /// The scene with `change` applied, checked again as a whole (e.g. another end time or
+    /// grid). Errors name the field but no line: the text is no longer the scene.
+    pub fn edit(self, change: impl FnOnce(&mut Scene)) -> Result<ValidScene, SceneError> {
+        let ValidScene {
+            mut scene, file, ..
+        } = self;
+        change(&mut scene);
+        validate(scene, &file, None)
+    }
+
+    /// The scene itself, for a caller that only reads or serialises it.
+    pub fn into_inner(self) -> Scene {
+        self.scene
+    }
+}
+
+/// The one path to a [`ValidScene`]: every check, errors located in `text` when given.
+fn validate(mut scene: Scene, file: &str, text: Option<&str>) -> Result<ValidScene, SceneError> {
+    let (grid, geoms) = check_scene(&mut scene).map_err(|i| i.into_error(file, text))?;
+    Ok(ValidScene {
+        scene,
+        grid,
+        geoms,
+        file: file.to_string(),
+    })
+}
+
+impl Scene {
+    /// Read and check a scene file; relative mesh paths are resolved against its directory.
+    pub fn load(path: &Path) -> Result<ValidScene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: file.clone(),
+            line: None,
+            field: None,
+            message: format!("cannot read the file: {e}"),
+        })?;
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let dir = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
+        Scene::parse_in(&text, &file, &stem, &dir)
+    }
+
+    /// Parse and check scene text; `file` names it in errors, `default_name` is used when the
+    /// scene has no `name`; relative mesh paths are resolved against the working directory.
+    pub fn parse(text: &str, file: &str, default_name: &str) -> Result<ValidScene, SceneError> {
+        Scene::parse_in(text, file, default_name, Path::new(""))
+    }
+
+    /// [`Scene::parse`] with relative mesh paths resolved against `base_dir`.
+    pub fn parse_in(
+        text: &str,
+        file: &str,
+        default_name: &str,
+        base_dir: &Path,
+    ) -> Result<ValidScene, SceneError> {
+        let opts = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        let mut scene: Scene = opts.from_str(text).map_err(|e| {
+            let (line, col) = (e.span.start.line, e.span.start.col);
+            SceneError {
+                file: file.to_string(),
+                line: Some(line),
+                field: path_at(text, offset_of(text, line, col)),
+                message: format!("{} (column {col})", e.code),
+            }
+        })?;
+        if scene.name.is_empty() {
+            scene.name = default_name.to_string();
+        }
+        scene.base_dir = base_dir.to_path_buf();
+        validate(scene, file, Some(text))
+    }
+}
