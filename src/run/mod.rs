@@ -10,10 +10,12 @@ use crate::scene::Scene;
 use crate::sim::engine::Simulation;
 use anyhow::Context;
 pub mod csv;
+pub mod outdir;
 
 use csv::write_row;
 pub use csv::{BODIES_HEADER, BodiesCsv, CONTACTS_HEADER, ContactsCsv};
 use indicatif::{ProgressBar, ProgressStyle};
+pub use outdir::{MARKER, prepare_dir};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -25,7 +27,8 @@ pub struct RunOptions {
     pub out: Option<PathBuf>,
     /// End time overriding the scene's.
     pub until: Option<f64>,
-    /// Replace an existing output directory.
+    /// Replace an existing output directory, if it is one tumble made (it holds the
+    /// [`MARKER`] file; see [`outdir`]).
     pub force: bool,
     /// No progress bar or progress lines.
     pub quiet: bool,
@@ -51,7 +54,8 @@ pub struct RunSummary {
     pub wall: f64,
 }
 
-/// An output directory that cannot be used (it exists, is a file, or cannot be created): a
+/// An output directory that cannot be used (it exists, is a file, cannot be created, is not
+/// one `--force` may replace, or is a scene's `output.dir` outside the current directory): a
 /// mistake on the command line or in the scene, so `tumble run` exits with status 2.
 #[derive(Debug)]
 pub struct BadOutputDir(pub String);
@@ -63,44 +67,6 @@ impl std::fmt::Display for BadOutputDir {
 }
 
 impl std::error::Error for BadOutputDir {}
-
-/// Resolve the output directory and make it (refusing to overwrite without `force`).
-pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> {
-    let dir = match (&opts.out, &scene.output.dir) {
-        (Some(d), _) => d.clone(),
-        (None, Some(d)) => PathBuf::from(d),
-        (None, None) => Path::new("runs").join(&scene.name),
-    };
-    let bad = |m: String| anyhow::Error::new(BadOutputDir(m));
-    if dir.exists() {
-        if !dir.is_dir() {
-            return Err(bad(format!(
-                "the output directory {} is a file, not a directory; choose another --out",
-                dir.display()
-            )));
-        }
-        if !opts.force {
-            return Err(bad(format!(
-                "the output directory {} exists; pass --force to replace it or --out to choose another",
-                dir.display()
-            )));
-        }
-        std::fs::remove_dir_all(&dir).map_err(|e| {
-            bad(format!(
-                "cannot remove the old output directory {}: {e}",
-                dir.display()
-            ))
-        })?;
-    }
-    std::fs::create_dir_all(&dir).map_err(|e| {
-        bad(format!(
-            "cannot create the output directory {}: {}",
-            dir.display(),
-            crate::io::output::disk_full(&dir, e)
-        ))
-    })?;
-    Ok(dir)
-}
 
 /// Apply the command line's end time and checkpoint interval to `scene`.
 fn apply_overrides(scene: &mut Scene, opts: &RunOptions) -> anyhow::Result<()> {
