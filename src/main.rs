@@ -38,7 +38,7 @@ enum Command {
         /// End time, overriding the scene's numerics.end_time.
         #[arg(long)]
         until: Option<f64>,
-        /// Replace the output directory if it exists.
+        /// Replace the output directory if it exists and tumble made it (it holds .tumble-run).
         #[arg(long)]
         force: bool,
         /// No progress output.

@@ -82,7 +82,9 @@ fn run_writes_outputs_and_refuses_to_overwrite() {
         .unwrap();
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("--force"));
-    // ...and allowed with it.
+    // ...and allowed with it, since tumble made the directory (it holds the marker): the old
+    // directory is replaced as a whole, so a snapshot of the first run does not survive.
+    assert!(out.join(".tumble-run").is_file());
     let st = tumble()
         .args([
             "run",
@@ -95,7 +97,198 @@ fn run_writes_outputs_and_refuses_to_overwrite() {
         ])
         .output()
         .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    assert!(out.join(".tumble-run").is_file());
+    assert!(!out.join("fields_000002.vti").exists());
+    let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 2, "{pvd}");
+    let last = tumble::io::output::read_vti(&out.join("fields_000001.vti")).unwrap();
+    assert!((last.time.unwrap() - 0.05).abs() < 1e-12);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The files under `d` (recursively, relative paths) with their contents.
+fn contents(d: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut v = Vec::new();
+    let mut todo = vec![d.to_path_buf()];
+    while let Some(p) = todo.pop() {
+        for e in std::fs::read_dir(&p).unwrap() {
+            let e = e.unwrap();
+            let path = e.path();
+            let rel = path.strip_prefix(d).unwrap().to_string_lossy().into_owned();
+            if e.file_type().unwrap().is_dir() {
+                v.push((rel + "/", Vec::new()));
+                todo.push(path);
+            } else {
+                v.push((rel, std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    v.sort();
+    v
+}
+
+/// --force replaces only a directory tumble made: a directory of the user's files, the
+/// current directory (`--out .`, even if tumble made it) and the home directory are refused
+/// with status 2, a message saying why, and every file left as it was.
+#[test]
+fn force_refuses_what_tumble_did_not_make_and_touches_nothing() {
+    let d = tmp("force");
+    let scene = d.join("tiny.ron");
+    std::fs::write(&scene, SCENE).unwrap();
+    // A directory of the user's files, one of them in a subdirectory.
+    let mine = d.join("mine");
+    std::fs::create_dir_all(mine.join("notes")).unwrap();
+    std::fs::write(mine.join("thesis.tex"), "chapter 1").unwrap();
+    std::fs::write(mine.join("notes/todo.txt"), "write chapter 2").unwrap();
+    // A run directory tumble made, used as the current directory, and a home directory
+    // that (by mistake) holds a marker.
+    let run = d.join("run");
+    let st = tumble()
+        .args(["run", scene.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&run)
+        .output()
+        .unwrap();
     assert!(st.status.success());
+    let home = d.join("home");
+    std::fs::create_dir_all(&home).unwrap();
+    std::fs::write(home.join(".tumble-run"), "").unwrap();
+    std::fs::write(home.join(".profile"), "export A=1").unwrap();
+    let cases: [(&std::path::Path, PathBuf, &str); 4] = [
+        (&d, mine.clone(), "was not made by tumble"),
+        (&mine, PathBuf::from("."), "is the current directory"),
+        (&run, PathBuf::from("."), "is the current directory"),
+        (&d, home.clone(), "is the home directory"),
+    ];
+    for (cwd, out, want) in cases {
+        let before = contents(&d);
+        let st = tumble()
+            .current_dir(cwd)
+            .env("HOME", &home)
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--quiet",
+                "--force",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let msg = String::from_utf8_lossy(&st.stderr);
+        assert_eq!(st.status.code(), Some(2), "{}: {msg}", out.display());
+        one_paragraph(&msg);
+        assert!(msg.contains(want), "{msg}");
+        assert!(msg.contains("--out"), "says what to do: {msg}");
+        assert_eq!(contents(&d), before, "{} is left as it was", out.display());
+    }
+    assert_eq!(
+        std::fs::read_to_string(mine.join("notes/todo.txt")).unwrap(),
+        "write chapter 2"
+    );
+    // Without --force the user's directory is refused too, without suggesting --force.
+    let st = tumble()
+        .args(["run", scene.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&mine)
+        .output()
+        .unwrap();
+    assert_eq!(st.status.code(), Some(2));
+    let msg = String::from_utf8_lossy(&st.stderr);
+    assert!(msg.contains("was not made by tumble"), "{msg}");
+    assert!(!msg.contains("--force"), "{msg}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The README's first command, `tumble run <scene> --force` into the default runs/<name>:
+/// it works when runs/ does not exist yet (a fresh clone) and again over its own output.
+#[test]
+fn force_into_the_default_run_dir_works_fresh_and_again() {
+    let d = tmp("default-force");
+    std::fs::write(d.join("tiny.ron"), SCENE).unwrap();
+    for _ in 0..2 {
+        let st = tumble()
+            .current_dir(&d)
+            .args(["run", "tiny.ron", "--quiet", "--force", "--until", "0.1"])
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        assert!(d.join("runs/tiny/.tumble-run").is_file());
+        assert!(d.join("runs/tiny/fields_000001.vti").is_file());
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A scene's output.dir may not leave the current directory (absolute, or with `..`): status
+/// 2 and nothing written; the same directory given with --out is the user's choice.
+#[test]
+fn scene_output_dir_outside_the_current_directory_is_refused() {
+    let d = tmp("scene-dir");
+    let work = d.join("work");
+    std::fs::create_dir_all(&work).unwrap();
+    let outside = d.join("outside");
+    for (dir, want) in [
+        ("../outside", "contains `..`"),
+        ("sub/../../outside", "contains `..`"),
+        (outside.to_str().unwrap(), "is an absolute path"),
+        (".", "names the current directory"),
+    ] {
+        let scene = SCENE.replace(
+            "output: (every: 0.1)",
+            &format!("output: (every: 0.1, dir: {dir:?})"),
+        );
+        std::fs::write(work.join("s.ron"), &scene).unwrap();
+        let st = tumble()
+            .current_dir(&work)
+            .args(["run", "s.ron", "--quiet", "--force"])
+            .output()
+            .unwrap();
+        let msg = String::from_utf8_lossy(&st.stderr);
+        assert_eq!(st.status.code(), Some(2), "{dir}: {msg}");
+        one_paragraph(&msg);
+        assert!(msg.contains(want), "{msg}");
+        assert!(msg.contains("--out"), "{msg}");
+        assert!(!outside.exists());
+        assert_eq!(listing(&work), ["s.ron"]);
+    }
+    // A plain relative output.dir is used; --out overrides an absolute one.
+    let scene = SCENE.replace("output: (every: 0.1)", "output: (every: 0.1, dir: \"a/b\")");
+    std::fs::write(work.join("s.ron"), &scene).unwrap();
+    let st = tumble()
+        .current_dir(&work)
+        .args(["run", "s.ron", "--quiet", "--until", "0.1"])
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    assert!(work.join("a/b/.tumble-run").is_file());
+    let scene = SCENE.replace(
+        "output: (every: 0.1)",
+        &format!("output: (every: 0.1, dir: {:?})", outside.to_str().unwrap()),
+    );
+    std::fs::write(work.join("s.ron"), &scene).unwrap();
+    let st = tumble()
+        .current_dir(&work)
+        .args(["run", "s.ron", "--quiet", "--until", "0.1", "--out"])
+        .arg(&outside)
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    assert!(outside.join("fields_000001.vti").is_file());
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -229,6 +229,22 @@ fn check_run(text: &str, name: &str) {
     assert_eq!(t.len(), steps);
     assert!(t.windows(2).all(|w| w[1] > w[0]));
     assert_eq!(*t.last().unwrap(), end);
+    // Appended to, not rewritten: every dataset of series.h5 is chunked and grows along its
+    // first axis without limit.
+    for name in ["series/t", "series/energy", "contacts/t", "contacts/body_a"] {
+        let ds = series.dataset(name).unwrap();
+        assert!(ds.is_resizable(), "{name}");
+        assert!(ds.chunk().is_some(), "{name}");
+        assert_eq!(ds.space().unwrap().maxdims()[0], None, "{name}");
+    }
+    // Its times are the rows of series.csv (the decimal text reads back to the same f64).
+    let csv_t: Vec<f64> = std::fs::read_to_string(out.join("series.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(csv_t, t);
     let mut q = sim
         .world
         .query::<(&tumble::bodies::Body, &tumble::bodies::RigidState)>();

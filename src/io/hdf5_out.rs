@@ -5,10 +5,13 @@
 //! `/velocity`, `/density`, `/chi`, `/phi`), C order, shape `(nz, ny, nx)` in 3D and
 //! `(ny, nx)` in 2D with a trailing axis of 3 for vectors (z = 0 in 2D), see
 //! [`crate::io::xdmf::dataset_shape`]; and root attributes `time`, `step`, `origin`, `spacing`
-//! (x, y, z) and `dims` (nx, ny, nz). `series.h5` is described at [`write_series`].
+//! (x, y, z) and `dims` (nx, ny, nz). `series.h5` is described at [`create_series`].
 //!
-//! Both are written to a temporary name next to the target, closed, fsynced and renamed over
-//! it, so a killed run leaves only complete files.
+//! A snapshot file, and `series.h5` when it is created (with no rows), are written to a
+//! temporary name next to the target, closed, fsynced and renamed over it, so a killed run
+//! leaves only complete files. Then rows are appended to `series.h5` in place
+//! ([`append_series`]): its datasets are chunked and resizable, so the run keeps only the rows
+//! since the last append in memory and writes each row once.
 
 use crate::base::grid::Grid;
 use crate::io::output::{VtkField, disk_full, temp_path};
@@ -180,12 +183,87 @@ fn group_name(b: &BodySeries, used: &[String]) -> String {
     n
 }
 
-/// Write `series.h5`: `/series/<column>` (t, dt, energy, enstrophy, circulation, max_omega)
+/// The group names of `s`'s bodies, in order.
+fn group_names(s: &Series) -> Vec<String> {
+    let mut used = Vec::new();
+    for b in &s.bodies {
+        let n = group_name(b, &used);
+        used.push(n);
+    }
+    used
+}
+
+impl Series {
+    /// Drop the values (keep the names): what is left after they are appended to the file.
+    pub fn clear_values(&mut self) {
+        for (_, v) in &mut self.global {
+            v.clear();
+        }
+        for b in &mut self.bodies {
+            for v in [
+                &mut b.t,
+                &mut b.center,
+                &mut b.velocity,
+                &mut b.angular_velocity,
+                &mut b.orientation,
+                &mut b.force,
+                &mut b.torque,
+            ] {
+                v.clear();
+            }
+        }
+        if let Some(c) = self.contacts.as_mut() {
+            *c = ContactSeries::default();
+        }
+    }
+}
+
+/// Rows of a chunk of the resizable datasets of `series.h5`.
+const CHUNK_ROWS: usize = 1024;
+
+/// A resizable dataset `name` in `g` with no rows yet, `cols` values per row (`cols` = 1: a
+/// one-dimensional dataset).
+fn growing<T: hdf5::H5Type>(g: &hdf5::Group, name: &str, cols: usize) -> hdf5::Result<()> {
+    let b = g.new_dataset::<T>();
+    if cols == 1 {
+        b.shape([0..]).chunk([CHUNK_ROWS]).create(name)?;
+    } else {
+        b.shape([(0, None), (cols, Some(cols))])
+            .chunk([CHUNK_ROWS, cols])
+            .create(name)?;
+    }
+    Ok(())
+}
+
+/// Append the rows `v` (flattened, as many values per row as the dataset has columns) to the
+/// resizable dataset `ds`.
+fn append_rows<T: hdf5::H5Type>(ds: &hdf5::Dataset, v: &[T]) -> hdf5::Result<()> {
+    let mut shape = ds.shape();
+    let cols: usize = shape[1..].iter().product();
+    let (old, n) = (shape[0], v.len() / cols.max(1));
+    if n == 0 {
+        return Ok(());
+    }
+    shape[0] = old + n;
+    ds.resize(shape.clone())?;
+    if shape.len() == 1 {
+        ds.write_slice(v, old..old + n)
+    } else {
+        let view = ndarray::ArrayView2::from_shape((n, cols), v)
+            .map_err(|e| hdf5::Error::Internal(e.to_string()))?;
+        ds.write_slice(view, ndarray::s![old..old + n, ..])
+    }
+}
+
+/// Create `series.h5` for the layout of `s` (its names; its values are not written, see
+/// [`append_series`]): `/series/<column>` (t, dt, energy, enstrophy, circulation, max_omega)
 /// per step; `/bodies/<name>/` per moving body with `t` (n), `center`, `velocity`,
 /// `angular_velocity`, `force`, `torque` (n, 3) and `orientation` (n, 4: w, x, y, z), and
 /// attributes `id` and `name`; `/contacts/` with `t`, `body_a`, `body_b` (indices into the
 /// root attribute `body_names`), `gap` and `normal_force`, one entry per close pair per step.
-pub fn write_series(path: &Path, s: &Series) -> io::Result<()> {
+/// The datasets are chunked and grow along their first axis as rows are appended. Written
+/// atomically: the file appears complete, with no rows, or not at all.
+pub fn create_series(path: &Path, s: &Series) -> io::Result<()> {
     atomic_h5(path, |file| {
         let names: Vec<hdf5::types::VarLenUnicode> = s
             .body_names
@@ -197,15 +275,12 @@ pub fn write_series(path: &Path, s: &Series) -> io::Result<()> {
             .create("body_names")?
             .write_raw(&names[..])?;
         let g = file.create_group("series")?;
-        for (name, v) in &s.global {
-            dataset(&g, name, &[v.len()], v)?;
+        for (name, _) in &s.global {
+            growing::<f64>(&g, name, 1)?;
         }
         let bodies = file.create_group("bodies")?;
-        let mut used = Vec::new();
-        for b in &s.bodies {
-            let gname = group_name(b, &used);
+        for (b, gname) in s.bodies.iter().zip(group_names(s)) {
             let bg = bodies.create_group(&gname)?;
-            used.push(gname);
             bg.new_attr::<u64>()
                 .create("id")?
                 .write_scalar(&(b.id as u64))?;
@@ -213,31 +288,166 @@ pub fn write_series(path: &Path, s: &Series) -> io::Result<()> {
             bg.new_attr::<hdf5::types::VarLenUnicode>()
                 .create("name")?
                 .write_scalar(&name)?;
-            let n = b.t.len();
-            dataset(&bg, "t", &[n], &b.t)?;
+            growing::<f64>(&bg, "t", 1)?;
+            for k in ["center", "velocity", "angular_velocity", "force", "torque"] {
+                growing::<f64>(&bg, k, 3)?;
+            }
+            growing::<f64>(&bg, "orientation", 4)?;
+        }
+        if s.contacts.is_some() {
+            let cg = file.create_group("contacts")?;
+            growing::<f64>(&cg, "t", 1)?;
+            growing::<u64>(&cg, "body_a", 1)?;
+            growing::<u64>(&cg, "body_b", 1)?;
+            growing::<f64>(&cg, "gap", 1)?;
+            growing::<f64>(&cg, "normal_force", 1)?;
+        }
+        Ok(())
+    })
+}
+
+/// Open `series.h5` to change it, run `f`, close and fsync it.
+fn modify_series(path: &Path, f: impl FnOnce(&hdf5::File) -> hdf5::Result<()>) -> io::Result<()> {
+    let result = (|| {
+        let file = hdf5::File::open_rw(path).map_err(|e| h5_err(path, e))?;
+        f(&file).map_err(|e| h5_err(path, e))?;
+        file.close().map_err(|e| h5_err(path, e))?;
+        std::fs::File::open(path)?.sync_all()
+    })();
+    result.map_err(|e| disk_full(path, e))
+}
+
+/// Append the values of `s` (steps and contacts since the last call) to the `series.h5` at
+/// `path`, made by [`create_series`] for the same layout: the writing is proportional to the
+/// new rows, not to the whole series.
+pub fn append_series(path: &Path, s: &Series) -> io::Result<()> {
+    modify_series(path, |file| {
+        for (name, v) in &s.global {
+            append_rows(&file.dataset(&format!("series/{name}"))?, v)?;
+        }
+        for (b, gname) in s.bodies.iter().zip(group_names(s)) {
+            let g = file.group(&format!("bodies/{gname}"))?;
+            append_rows(&g.dataset("t")?, &b.t)?;
             for (k, v) in [
                 ("center", &b.center),
                 ("velocity", &b.velocity),
                 ("angular_velocity", &b.angular_velocity),
+                ("orientation", &b.orientation),
                 ("force", &b.force),
                 ("torque", &b.torque),
             ] {
-                dataset(&bg, k, &[n, 3], v)?;
+                append_rows(&g.dataset(k)?, v)?;
             }
-            dataset(&bg, "orientation", &[n, 4], &b.orientation)?;
         }
         if let Some(c) = &s.contacts {
-            let cg = file.create_group("contacts")?;
-            let m = c.t.len();
-            dataset(&cg, "t", &[m], &c.t)?;
-            for (k, v) in [("body_a", &c.body_a), ("body_b", &c.body_b)] {
-                cg.new_dataset::<u64>()
-                    .shape([m])
-                    .create(k)?
-                    .write_raw(&v[..])?;
+            let g = file.group("contacts")?;
+            append_rows(&g.dataset("t")?, &c.t)?;
+            append_rows(&g.dataset("body_a")?, &c.body_a)?;
+            append_rows(&g.dataset("body_b")?, &c.body_b)?;
+            append_rows(&g.dataset("gap")?, &c.gap)?;
+            append_rows(&g.dataset("normal_force")?, &c.normal_force)?;
+        }
+        Ok(())
+    })
+}
+
+/// Where a restart cuts `series.h5` back to: the rows of the steps up to its checkpoint and
+/// of the contacts up to its time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SeriesCut {
+    /// Steps kept (the initial state and every step up to the checkpoint).
+    pub steps: usize,
+    /// Contact records kept.
+    pub contacts: usize,
+}
+
+/// Check that the `series.h5` at `path`, made for the layout of `s`, holds the first `steps`
+/// steps (the last at the checkpoint's time `t`) and return where to cut it
+/// ([`cut_series`]). Reads only; `Ok(Err(why))` says what the file lacks.
+pub fn check_series(
+    path: &Path,
+    s: &Series,
+    steps: usize,
+    t: f64,
+) -> io::Result<Result<SeriesCut, String>> {
+    (|| -> hdf5::Result<Result<SeriesCut, String>> {
+        let file = hdf5::File::open(path)?;
+        let short = |ds: &hdf5::Dataset, need: usize, what: &str| {
+            let have = ds.shape().first().copied().unwrap_or(0);
+            (have < need).then(|| {
+                format!("has {have} rows of {what}, fewer than the {need} up to the checkpoint")
+            })
+        };
+        for (name, _) in &s.global {
+            let what = format!("/series/{name}");
+            if let Some(e) = short(&file.dataset(&what)?, steps, &what) {
+                return Ok(Err(e));
             }
-            dataset(&cg, "gap", &[m], &c.gap)?;
-            dataset(&cg, "normal_force", &[m], &c.normal_force)?;
+        }
+        for gname in group_names(s) {
+            let g = file.group(&format!("bodies/{gname}"))?;
+            for k in [
+                "t",
+                "center",
+                "velocity",
+                "angular_velocity",
+                "orientation",
+                "force",
+                "torque",
+            ] {
+                let what = format!("/bodies/{gname}/{k}");
+                if let Some(e) = short(&g.dataset(k)?, steps, &what) {
+                    return Ok(Err(e));
+                }
+            }
+            let last = g
+                .dataset("t")?
+                .read_slice_1d::<f64, _>(steps.saturating_sub(1)..steps)?;
+            if last.first() != Some(&t) {
+                return Ok(Err(format!(
+                    "has no entry of /bodies/{gname} at the checkpoint's time t = {t}"
+                )));
+            }
+        }
+        let mut contacts = 0;
+        if s.contacts.is_some() {
+            let g = file.group("contacts")?;
+            let ct: Vec<f64> = g.dataset("t")?.read_raw()?;
+            contacts = ct.partition_point(|&x| x <= t);
+            for k in ["body_a", "body_b", "gap", "normal_force"] {
+                let what = format!("/contacts/{k}");
+                if let Some(e) = short(&g.dataset(k)?, contacts, &what) {
+                    return Ok(Err(e));
+                }
+            }
+        }
+        Ok(Ok(SeriesCut { steps, contacts }))
+    })()
+    .map_err(|e| read_err(path, e))
+}
+
+/// Cut the `series.h5` at `path`, made for the layout of `s`, back to `cut` rows (see
+/// [`check_series`]).
+pub fn cut_series(path: &Path, s: &Series, cut: SeriesCut) -> io::Result<()> {
+    let to = |ds: hdf5::Dataset, rows: usize| {
+        let mut shape = ds.shape();
+        shape[0] = rows;
+        ds.resize(shape)
+    };
+    modify_series(path, |file| {
+        for (name, _) in &s.global {
+            to(file.dataset(&format!("series/{name}"))?, cut.steps)?;
+        }
+        for gname in group_names(s) {
+            let g = file.group(&format!("bodies/{gname}"))?;
+            for ds in g.datasets()? {
+                to(ds, cut.steps)?;
+            }
+        }
+        if s.contacts.is_some() {
+            for ds in file.group("contacts")?.datasets()? {
+                to(ds, cut.contacts)?;
+            }
         }
         Ok(())
     })

@@ -1,7 +1,7 @@
 //! Field snapshots of a run in the scene's formats (`output.formats`): VTK (`fields_NNNNNN.vti`
 //! indexed by `fields.pvd`) and, in builds with the `hdf5` feature, HDF5 (`fields_NNNNNN.h5`
 //! indexed by `fields.xmf`, plus `series.h5`, the time series of the run, the bodies and the
-//! contacts, rewritten at every snapshot, at every checkpoint and at the end).
+//! contacts, appended to at every snapshot, at every checkpoint and at the end).
 //!
 //! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
 //! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
@@ -42,8 +42,9 @@ impl Snapshots {
 
     /// The writers of a restarted run in `dir`, continuing after the snapshots its checkpoint
     /// (`progress`) counts; `sim` is the restored simulation. The HDF5 side is read back from
-    /// the files kept: each snapshot's time for `fields.xmf`, and `series.h5` cut to the
-    /// checkpoint's steps (it is written at every checkpoint, so it holds them all). Nothing
+    /// the files kept: each snapshot's time for `fields.xmf`, and the lengths of `series.h5`
+    /// checked against the checkpoint's steps (it is appended to at every checkpoint, so it
+    /// holds them all). Nothing
     /// is written (see [`cut_back`](Snapshots::cut_back)); an error says why the run directory
     /// does not match the checkpoint.
     pub fn resume(dir: &Path, sim: &Simulation, progress: &RunProgress) -> Result<Self, String> {
@@ -80,8 +81,8 @@ impl Snapshots {
 
     /// Make the run directory match a resumed [`Snapshots`]: remove the snapshot files
     /// numbered from [`count`](Snapshots::count) on (written after the checkpoint), rewrite
-    /// `fields.pvd` and `fields.xmf` with the snapshots kept and `series.h5` with the steps
-    /// up to the checkpoint.
+    /// `fields.pvd` and `fields.xmf` with the snapshots kept, and cut `series.h5` back to the
+    /// steps up to the checkpoint.
     pub fn cut_back(&mut self) -> anyhow::Result<()> {
         for k in self.count.. {
             let mut found = false;
@@ -101,9 +102,9 @@ impl Snapshots {
             p.write().context("cannot write fields.pvd")?;
         }
         #[cfg(feature = "hdf5")]
-        if let Some(h) = &self.hdf5 {
+        if let Some(h) = self.hdf5.as_mut() {
             h.xmf.write().context("cannot write fields.xmf")?;
-            h.write_series(&self.dir)?;
+            h.cut_back(&self.dir)?;
         }
         Ok(())
     }
@@ -160,10 +161,11 @@ impl Snapshots {
         Ok(written)
     }
 
-    /// Write what is kept in memory (`series.h5`): at a checkpoint and at the end.
+    /// Write what is kept in memory (the rows of `series.h5` since it was last appended to):
+    /// at a checkpoint and at the end.
     pub fn finish(&mut self) -> anyhow::Result<()> {
         #[cfg(feature = "hdf5")]
-        if let Some(h) = self.hdf5.as_ref() {
+        if let Some(h) = self.hdf5.as_mut() {
             h.write_series(&self.dir)?;
         }
         Ok(())
@@ -207,9 +209,23 @@ fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
 #[cfg(feature = "hdf5")]
 struct Hdf5Outputs {
     xmf: crate::io::xdmf::XdmfSeries,
+    /// The rows recorded since `series.h5` was last appended to.
     series: crate::io::hdf5_out::Series,
     /// The step last recorded (a step is recorded once).
     steps_recorded: u64,
+    /// What `series.h5` is: not created yet, to be cut back (a restart), or ready.
+    file: SeriesFile,
+}
+
+/// The state of `series.h5` in the run directory.
+#[cfg(feature = "hdf5")]
+enum SeriesFile {
+    /// Not created yet (a new run).
+    Missing,
+    /// Written by the run a restart continues: cut back to this before appending.
+    CutTo(crate::io::hdf5_out::SeriesCut),
+    /// Ready for rows.
+    Ready,
 }
 
 #[cfg(feature = "hdf5")]
@@ -247,6 +263,7 @@ impl Hdf5Outputs {
                 body_names: scene.bodies.iter().map(|b| b.name.clone()).collect(),
             },
             steps_recorded: u64::MAX,
+            file: SeriesFile::Missing,
         }
     }
 
@@ -278,14 +295,15 @@ impl Hdf5Outputs {
         h.xmf =
             crate::io::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries);
         let path = dir.join("series.h5");
-        crate::io::hdf5_out::read_series(&path, &mut h.series)
-            .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?;
-        cut_series(&mut h.series, step0 as usize + 1, t0).map_err(|e| {
-            format!(
-                "{} {e}: the run directory does not match the checkpoint",
-                path.display()
-            )
-        })?;
+        let cut = crate::io::hdf5_out::check_series(&path, &h.series, step0 as usize + 1, t0)
+            .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?
+            .map_err(|e| {
+                format!(
+                    "{} {e}: the run directory does not match the checkpoint",
+                    path.display()
+                )
+            })?;
+        h.file = SeriesFile::CutTo(cut);
         h.steps_recorded = step0;
         Ok(h)
     }
@@ -367,9 +385,33 @@ impl Hdf5Outputs {
         Ok(vec![file, "fields.xmf".into(), "series.h5".into()])
     }
 
-    fn write_series(&self, dir: &Path) -> anyhow::Result<()> {
-        crate::io::hdf5_out::write_series(&dir.join("series.h5"), &self.series)
-            .context("cannot write series.h5")
+    /// Cut `series.h5` back to the checkpoint a restart continues from (see
+    /// [`Snapshots::cut_back`]).
+    fn cut_back(&mut self, dir: &Path) -> anyhow::Result<()> {
+        if let SeriesFile::CutTo(cut) = self.file {
+            crate::io::hdf5_out::cut_series(&dir.join("series.h5"), &self.series, cut)
+                .context("cannot cut series.h5 back to the checkpoint")?;
+            self.file = SeriesFile::Ready;
+        }
+        Ok(())
+    }
+
+    /// Append the rows recorded since the last call to `series.h5` (created first in a new
+    /// run) and drop them from memory.
+    fn write_series(&mut self, dir: &Path) -> anyhow::Result<()> {
+        use crate::io::hdf5_out::{append_series, create_series};
+        let path = dir.join("series.h5");
+        match self.file {
+            SeriesFile::Ready => {}
+            SeriesFile::Missing => {
+                create_series(&path, &self.series).context("cannot write series.h5")?;
+                self.file = SeriesFile::Ready;
+            }
+            SeriesFile::CutTo(_) => self.cut_back(dir)?,
+        }
+        append_series(&path, &self.series).context("cannot write series.h5")?;
+        self.series.clear_values();
+        Ok(())
     }
 }
 
@@ -383,70 +425,4 @@ fn xdmf_attributes(fields: &[VtkField]) -> Vec<crate::io::xdmf::XdmfAttribute> {
             components: if f.components.len() == 1 { 1 } else { 3 },
         })
         .collect()
-}
-
-/// Cut `series` (read back from `series.h5`) to the first `steps` recorded steps (the initial
-/// state and every step up to a checkpoint at time `t`) and the contacts up to `t`. An error
-/// says what is missing.
-#[cfg(feature = "hdf5")]
-fn cut_series(
-    series: &mut crate::io::hdf5_out::Series,
-    steps: usize,
-    t: f64,
-) -> Result<(), String> {
-    let cut = |v: &mut Vec<f64>, per: usize, what: &str| -> Result<(), String> {
-        if v.len() < per * steps {
-            return Err(format!(
-                "has {} values of {what}, fewer than the {} of the {steps} steps up to the \
-                 checkpoint",
-                v.len(),
-                per * steps
-            ));
-        }
-        v.truncate(per * steps);
-        Ok(())
-    };
-    for (name, v) in &mut series.global {
-        cut(v, 1, &format!("/series/{name}"))?;
-    }
-    for b in &mut series.bodies {
-        let g = format!("/bodies/{}", b.name);
-        cut(&mut b.t, 1, &format!("{g}/t"))?;
-        if b.t.last() != Some(&t) {
-            return Err(format!(
-                "has no entry of {g} at the checkpoint's time t = {t}"
-            ));
-        }
-        for (k, v, per) in [
-            ("center", &mut b.center, 3),
-            ("velocity", &mut b.velocity, 3),
-            ("angular_velocity", &mut b.angular_velocity, 3),
-            ("orientation", &mut b.orientation, 4),
-            ("force", &mut b.force, 3),
-            ("torque", &mut b.torque, 3),
-        ] {
-            cut(v, per, &format!("{g}/{k}"))?;
-        }
-    }
-    if let Some(c) = series.contacts.as_mut() {
-        let m = c.t.partition_point(|&x| x <= t);
-        let lens = [
-            c.body_a.len(),
-            c.body_b.len(),
-            c.gap.len(),
-            c.normal_force.len(),
-        ];
-        if lens.iter().any(|&n| n < m) {
-            return Err(format!(
-                "has contact records of unequal lengths ({} times, {lens:?})",
-                c.t.len()
-            ));
-        }
-        c.t.truncate(m);
-        c.body_a.truncate(m);
-        c.body_b.truncate(m);
-        c.gap.truncate(m);
-        c.normal_force.truncate(m);
-    }
-    Ok(())
 }

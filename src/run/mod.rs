@@ -9,7 +9,13 @@ use crate::io::snapshots::Snapshots;
 use crate::scene::{Scene, ValidScene};
 use crate::sim::engine::Simulation;
 use anyhow::Context;
+pub mod csv;
+pub mod outdir;
+
+use csv::write_row;
+pub use csv::{BODIES_HEADER, BodiesCsv, CONTACTS_HEADER, ContactsCsv};
 use indicatif::{ProgressBar, ProgressStyle};
+pub use outdir::{MARKER, prepare_dir};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -21,7 +27,8 @@ pub struct RunOptions {
     pub out: Option<PathBuf>,
     /// End time overriding the scene's.
     pub until: Option<f64>,
-    /// Replace an existing output directory.
+    /// Replace an existing output directory, if it is one tumble made (it holds the
+    /// [`MARKER`] file; see [`outdir`]).
     pub force: bool,
     /// No progress bar or progress lines.
     pub quiet: bool,
@@ -47,7 +54,8 @@ pub struct RunSummary {
     pub wall: f64,
 }
 
-/// An output directory that cannot be used (it exists, is a file, or cannot be created): a
+/// An output directory that cannot be used (it exists, is a file, cannot be created, is not
+/// one `--force` may replace, or is a scene's `output.dir` outside the current directory): a
 /// mistake on the command line or in the scene, so `tumble run` exits with status 2.
 #[derive(Debug)]
 pub struct BadOutputDir(pub String);
@@ -59,44 +67,6 @@ impl std::fmt::Display for BadOutputDir {
 }
 
 impl std::error::Error for BadOutputDir {}
-
-/// Resolve the output directory and make it (refusing to overwrite without `force`).
-pub fn prepare_dir(scene: &Scene, opts: &RunOptions) -> anyhow::Result<PathBuf> {
-    let dir = match (&opts.out, &scene.output.dir) {
-        (Some(d), _) => d.clone(),
-        (None, Some(d)) => PathBuf::from(d),
-        (None, None) => Path::new("runs").join(&scene.name),
-    };
-    let bad = |m: String| anyhow::Error::new(BadOutputDir(m));
-    if dir.exists() {
-        if !dir.is_dir() {
-            return Err(bad(format!(
-                "the output directory {} is a file, not a directory; choose another --out",
-                dir.display()
-            )));
-        }
-        if !opts.force {
-            return Err(bad(format!(
-                "the output directory {} exists; pass --force to replace it or --out to choose another",
-                dir.display()
-            )));
-        }
-        std::fs::remove_dir_all(&dir).map_err(|e| {
-            bad(format!(
-                "cannot remove the old output directory {}: {e}",
-                dir.display()
-            ))
-        })?;
-    }
-    std::fs::create_dir_all(&dir).map_err(|e| {
-        bad(format!(
-            "cannot create the output directory {}: {}",
-            dir.display(),
-            crate::io::output::disk_full(&dir, e)
-        ))
-    })?;
-    Ok(dir)
-}
 
 /// Apply the command line's end time and checkpoint interval to `scene`.
 fn apply_overrides(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<ValidScene> {
@@ -333,20 +303,12 @@ fn continue_run(
     atomic_write(&dir.join("scene.ron"), sim.scene().to_ron().as_bytes())
         .context("cannot write scene.ron")?;
     let series = CsvWriter::append(&dir.join("series.csv"), 6).context("cannot open series.csv")?;
-    let append = |name: &str| -> anyhow::Result<std::io::BufWriter<std::fs::File>> {
-        let path = dir.join(name);
-        let f = std::fs::OpenOptions::new()
-            .append(true)
-            .open(&path)
-            .with_context(|| format!("cannot open {}", path.display()))?;
-        Ok(std::io::BufWriter::new(f))
-    };
     let bodies_csv = match p.bodies_len {
-        Some(_) => Some(BodiesCsv(append("bodies.csv")?)),
+        Some(_) => Some(BodiesCsv::append(&dir.join("bodies.csv"))?),
         None => None,
     };
     let contacts_csv = match p.contacts_len {
-        Some(_) => Some(ContactsCsv(append("contacts.csv")?)),
+        Some(_) => Some(ContactsCsv::append(&dir.join("contacts.csv"))?),
         None => None,
     };
     let next_ckpt = sim
@@ -622,142 +584,9 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     bar
 }
 
-fn write_row(series: &mut CsvWriter, s: &Sample) -> anyhow::Result<()> {
-    series
-        .row(&[s.t, s.dt, s.energy, s.enstrophy, s.circulation, s.max_omega])
-        .context("cannot write series.csv")
-}
-
 /// Write a snapshot and log a one-line summary of the state.
 fn write_snapshot(sim: &Simulation, snaps: &mut Snapshots) -> anyhow::Result<()> {
     let files = snaps.write(sim)?;
     crate::io::runlog::output_line(sim, &files);
     Ok(())
-}
-
-/// `bodies.csv`: one row per moving body per step.
-pub struct BodiesCsv(std::io::BufWriter<std::fs::File>);
-
-/// The header of `bodies.csv`.
-pub const BODIES_HEADER: &str = "t,id,name,x,y,z,vx,vy,vz,wx,wy,wz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz";
-
-impl BodiesCsv {
-    /// Create the file if the scene has moving bodies.
-    pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Option<Self>> {
-        if !sim
-            .scene()
-            .bodies
-            .iter()
-            .any(|b| !matches!(b.kind, crate::scene::BodyKind::Static))
-        {
-            return Ok(None);
-        }
-        use std::io::Write;
-        let f = std::fs::File::create(path)
-            .with_context(|| format!("cannot create {}", path.display()))?;
-        let mut w = std::io::BufWriter::new(f);
-        writeln!(w, "{BODIES_HEADER}").context("cannot write bodies.csv")?;
-        Ok(Some(BodiesCsv(w)))
-    }
-
-    /// Append the current state of every moving body.
-    pub fn rows(&mut self, sim: &mut Simulation) -> anyhow::Result<()> {
-        use crate::bodies::{Body, Hydro, RigidState};
-        use std::io::Write;
-        let t = sim.time();
-        let mut q = sim.world.query::<(&Body, &RigidState, &Hydro)>();
-        for (b, s, h) in q.iter(&sim.world) {
-            if b.is_static() {
-                continue;
-            }
-            let o = s.orientation;
-            writeln!(
-                self.0,
-                "{t},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                b.id,
-                b.name,
-                s.center.x,
-                s.center.y,
-                s.center.z,
-                s.velocity.x,
-                s.velocity.y,
-                s.velocity.z,
-                s.angular_velocity.x,
-                s.angular_velocity.y,
-                s.angular_velocity.z,
-                o.w,
-                o.x,
-                o.y,
-                o.z,
-                h.force.x,
-                h.force.y,
-                h.force.z,
-                h.torque.x,
-                h.torque.y,
-                h.torque.z
-            )
-            .context("cannot write bodies.csv")?;
-        }
-        Ok(())
-    }
-
-    /// Flush to disk.
-    pub fn flush(&mut self) -> anyhow::Result<()> {
-        use std::io::Write;
-        self.0.flush().context("cannot write bodies.csv")
-    }
-}
-
-/// `contacts.csv`: one row per close pair of bodies per step.
-pub struct ContactsCsv(std::io::BufWriter<std::fs::File>);
-
-/// The header of `contacts.csv`.
-pub const CONTACTS_HEADER: &str = "t,body_a,body_b,gap,normal_force";
-
-impl ContactsCsv {
-    /// Create the file if the scene has a dynamic body.
-    pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Option<Self>> {
-        if !sim
-            .scene()
-            .bodies
-            .iter()
-            .any(|b| matches!(b.kind, crate::scene::BodyKind::Dynamic))
-        {
-            return Ok(None);
-        }
-        use std::io::Write;
-        let f = std::fs::File::create(path)
-            .with_context(|| format!("cannot create {}", path.display()))?;
-        let mut w = std::io::BufWriter::new(f);
-        writeln!(w, "{CONTACTS_HEADER}").context("cannot write contacts.csv")?;
-        Ok(Some(ContactsCsv(w)))
-    }
-
-    /// Append this step's close pairs.
-    pub fn rows(&mut self, sim: &Simulation) -> anyhow::Result<()> {
-        use std::io::Write;
-        let Some(c) = sim
-            .world
-            .get_resource::<crate::systems::collision::Contacts>()
-        else {
-            return Ok(());
-        };
-        let t = sim.time();
-        let names = &sim.scene().bodies;
-        for r in &c.records {
-            writeln!(
-                self.0,
-                "{t},{},{},{},{}",
-                names[r.a].name, names[r.b].name, r.gap, r.force
-            )
-            .context("cannot write contacts.csv")?;
-        }
-        Ok(())
-    }
-
-    /// Flush to disk.
-    pub fn flush(&mut self) -> anyhow::Result<()> {
-        use std::io::Write;
-        self.0.flush().context("cannot write contacts.csv")
-    }
 }

@@ -1,0 +1,173 @@
+//! The run's CSV time series: `series.csv` (one row per step), `bodies.csv` (one row per
+//! moving body per step) and `contacts.csv` (one row per close pair per step).
+
+use crate::base::fields::Sample;
+use crate::io::output::CsvWriter;
+use crate::sim::engine::Simulation;
+use anyhow::Context;
+use std::path::Path;
+
+/// Append the state `s` to `series.csv`.
+pub fn write_row(series: &mut CsvWriter, s: &Sample) -> anyhow::Result<()> {
+    series
+        .row(&[s.t, s.dt, s.energy, s.enstrophy, s.circulation, s.max_omega])
+        .context("cannot write series.csv")
+}
+
+/// A CSV file written through the `csv` crate: a body name with a comma, a quote or a line
+/// break is quoted as RFC 4180 says; numbers are written as Rust prints an `f64` (shortest
+/// text that reads back to the same value).
+type Csv = csv::Writer<std::fs::File>;
+
+/// Create `path` and write its `header` (comma-separated names, none needing quotes).
+fn create(path: &Path, header: &str) -> anyhow::Result<Csv> {
+    let f =
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut w = writer(f);
+    w.write_record(header.split(','))
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(w)
+}
+
+/// Open `path` (a file [`create`] made) to append rows: a restarted run.
+fn append(path: &Path) -> anyhow::Result<Csv> {
+    let f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(path)
+        .with_context(|| format!("cannot open {}", path.display()))?;
+    Ok(writer(f))
+}
+
+fn writer(f: std::fs::File) -> Csv {
+    csv::WriterBuilder::new()
+        .has_headers(false)
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(f)
+}
+
+/// `bodies.csv`: one row per moving body per step.
+pub struct BodiesCsv(Csv);
+
+/// The header of `bodies.csv`.
+pub const BODIES_HEADER: &str = "t,id,name,x,y,z,vx,vy,vz,wx,wy,wz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz";
+
+impl BodiesCsv {
+    /// Create the file if the scene has moving bodies.
+    pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Option<Self>> {
+        if !sim
+            .scene()
+            .bodies
+            .iter()
+            .any(|b| !matches!(b.kind, crate::scene::BodyKind::Static))
+        {
+            return Ok(None);
+        }
+        Ok(Some(BodiesCsv(create(path, BODIES_HEADER)?)))
+    }
+
+    /// Open the file of an earlier run to append to it (a restart).
+    pub fn append(path: &Path) -> anyhow::Result<Self> {
+        Ok(BodiesCsv(append(path)?))
+    }
+
+    /// Append the current state of every moving body.
+    pub fn rows(&mut self, sim: &mut Simulation) -> anyhow::Result<()> {
+        use crate::bodies::{Body, Hydro, RigidState};
+        let t = sim.time();
+        let mut q = sim.world.query::<(&Body, &RigidState, &Hydro)>();
+        for (b, s, h) in q.iter(&sim.world) {
+            if b.is_static() {
+                continue;
+            }
+            let o = s.orientation;
+            let nums = [
+                s.center.x,
+                s.center.y,
+                s.center.z,
+                s.velocity.x,
+                s.velocity.y,
+                s.velocity.z,
+                s.angular_velocity.x,
+                s.angular_velocity.y,
+                s.angular_velocity.z,
+                o.w,
+                o.x,
+                o.y,
+                o.z,
+                h.force.x,
+                h.force.y,
+                h.force.z,
+                h.torque.x,
+                h.torque.y,
+                h.torque.z,
+            ];
+            let record = [t.to_string(), b.id.to_string(), b.name.clone()]
+                .into_iter()
+                .chain(nums.iter().map(f64::to_string));
+            self.0
+                .write_record(record)
+                .context("cannot write bodies.csv")?;
+        }
+        Ok(())
+    }
+
+    /// Flush to disk.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        self.0.flush().context("cannot write bodies.csv")
+    }
+}
+
+/// `contacts.csv`: one row per close pair of bodies per step.
+pub struct ContactsCsv(Csv);
+
+/// The header of `contacts.csv`.
+pub const CONTACTS_HEADER: &str = "t,body_a,body_b,gap,normal_force";
+
+impl ContactsCsv {
+    /// Create the file if the scene has a dynamic body.
+    pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Option<Self>> {
+        if !sim
+            .scene()
+            .bodies
+            .iter()
+            .any(|b| matches!(b.kind, crate::scene::BodyKind::Dynamic))
+        {
+            return Ok(None);
+        }
+        Ok(Some(ContactsCsv(create(path, CONTACTS_HEADER)?)))
+    }
+
+    /// Open the file of an earlier run to append to it (a restart).
+    pub fn append(path: &Path) -> anyhow::Result<Self> {
+        Ok(ContactsCsv(append(path)?))
+    }
+
+    /// Append this step's close pairs.
+    pub fn rows(&mut self, sim: &Simulation) -> anyhow::Result<()> {
+        let Some(c) = sim
+            .world
+            .get_resource::<crate::systems::collision::Contacts>()
+        else {
+            return Ok(());
+        };
+        let t = sim.time().to_string();
+        let names = &sim.scene().bodies;
+        for r in &c.records {
+            self.0
+                .write_record([
+                    t.as_str(),
+                    names[r.a].name.as_str(),
+                    names[r.b].name.as_str(),
+                    &r.gap.to_string(),
+                    &r.force.to_string(),
+                ])
+                .context("cannot write contacts.csv")?;
+        }
+        Ok(())
+    }
+
+    /// Flush to disk.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        self.0.flush().context("cannot write contacts.csv")
+    }
+}
