@@ -260,8 +260,14 @@ fn main() -> ExitCode {
             if list {
                 for c in CASES {
                     println!(
-                        "{:<18} full: {:<16} quick: {:<8} {}\n{:<18} {}",
-                        c.name, c.full_time, c.quick_time, c.reference, "", c.description
+                        "{}: {}\n    reference: {}\n    full ({}): {}\n    quick ({}): {}",
+                        c.name,
+                        c.description,
+                        c.reference,
+                        c.full_time,
+                        c.full,
+                        c.quick_time,
+                        c.quick
                     );
                 }
                 return ExitCode::SUCCESS;

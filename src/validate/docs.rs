@@ -108,7 +108,42 @@ pub fn markdown(reports: &[Report], quick: bool, date: &str, machine: &str, wall
 
 #[cfg(test)]
 mod tests {
-    use super::utc_date;
+    use super::{markdown, utc_date};
+    use crate::validate::{Report, Row};
+
+    #[test]
+    fn a_failing_row_and_a_failed_run_show_as_fail_with_their_numbers() {
+        let mut a = Report::new("sphere-settling");
+        a.rows.push(Row::rel("U vs paper", 0.256, 0.2403, 0.04));
+        a.rows.push(Row::yes_no("converges monotonically", true));
+        a.rows.push(Row::range("gap / eps", 0.1, 3.0, 3.5));
+        let mut b = Report::new("dkt");
+        b.error = Some("body `upper` left the domain".into());
+        let page = markdown(&[a, b], false, "2026-01-02", "nproc 2", 12.0);
+        assert!(page.contains("# Validation status (full tier)"), "{page}");
+        assert!(page.contains("| `sphere-settling` | FAIL |"), "{page}");
+        assert!(
+            page.contains(
+                "| U vs paper | 2.560000e-1 | 2.403000e-1 | 6.133% | 4.000% | **FAIL** |"
+            ),
+            "{page}"
+        );
+        assert!(
+            page.contains("| converges monotonically | yes | yes | - | - | PASS |"),
+            "{page}"
+        );
+        assert!(
+            page.contains("| gap / eps | [0.1, 3] | 3.500000e0 | 5.00e-1 | in range | **FAIL** |"),
+            "{page}"
+        );
+        assert!(page.contains("| `dkt` | FAIL |"), "{page}");
+        assert!(
+            page.contains("**The run failed:** body `upper` left the domain"),
+            "{page}"
+        );
+        assert!(page.contains("- date: 2026-01-02"), "{page}");
+        assert!(page.contains("- result: 0 passed, 2 failed"), "{page}");
+    }
 
     #[test]
     fn dates_of_known_days() {

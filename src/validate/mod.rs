@@ -29,15 +29,15 @@ pub enum RunTime {
     /// Up to a few minutes.
     Minutes,
     /// Tens of minutes or more.
-    Hours,
+    Long,
 }
 
 impl fmt::Display for RunTime {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
+        f.pad(match self {
             RunTime::Seconds => "seconds",
             RunTime::Minutes => "minutes",
-            RunTime::Hours => "an hour or more",
+            RunTime::Long => "tens of minutes or more",
         })
     }
 }
@@ -138,7 +138,7 @@ pub const CASES: &[Case] = &[
         reference: "paper section 4.1",
         full: "h = 1/256 and 1/384, kappa doubled at 1/256",
         quick: "h = 1/64 and 1/96, kappa doubled at 1/64 (the same tolerances)",
-        full_time: RunTime::Hours,
+        full_time: RunTime::Long,
         quick_time: RunTime::Seconds,
         run: sedimentation_2d,
     },
@@ -148,7 +148,7 @@ pub const CASES: &[Case] = &[
         reference: "paper Table 1",
         full: "the six (d, nu) cases, grid study h = 1/32 to 1/96, icosphere",
         quick: "d = 0.3, nu = 0.02 at h = 1/64 only",
-        full_time: RunTime::Hours,
+        full_time: RunTime::Long,
         quick_time: RunTime::Minutes,
         run: sphere_settling,
     },
@@ -208,7 +208,7 @@ pub const CASES: &[Case] = &[
         reference: "issue criterion (Stokes settling velocity)",
         full: "200 spheres (scenes/tank-200.ron) to t = 6",
         quick: "the bottom layer (36 spheres) to t = 1.5",
-        full_time: RunTime::Hours,
+        full_time: RunTime::Long,
         quick_time: RunTime::Minutes,
         run: contact::tank_pile,
     },
