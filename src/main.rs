@@ -309,11 +309,34 @@ fn main() -> ExitCode {
                     .duration_since(std::time::UNIX_EPOCH)
                     .map(|d| tumble::validate::docs::utc_date(d.as_secs()))
                     .unwrap_or_else(|_| "unknown".into());
-                let machine = format!(
+                let mut machine = format!(
                     "nproc {}, {} worker threads",
                     std::thread::available_parallelism().map_or(0, |n| n.get()),
                     rayon::current_num_threads()
                 );
+                // On Linux: the load at the end (other work inflates the wall times) and the
+                // CPU time of this run (user + system, /proc/self/stat fields 14 and 15 in
+                // clock ticks of 1/100 s).
+                if let Ok(load) = std::fs::read_to_string("/proc/loadavg") {
+                    let l: Vec<&str> = load.split_whitespace().take(3).collect();
+                    machine += &format!("; load average {} at the end", l.join(" "));
+                }
+                if let Ok(stat) = std::fs::read_to_string("/proc/self/stat")
+                    && let Some(rest) = stat.rsplit(')').next()
+                {
+                    let f: Vec<f64> = rest
+                        .split_whitespace()
+                        .skip(11)
+                        .take(2)
+                        .filter_map(|x| x.parse().ok())
+                        .collect();
+                    if f.len() == 2 {
+                        machine += &format!(
+                            "; CPU time of the run {:.1} s (user + system)",
+                            (f[0] + f[1]) / 100.0
+                        );
+                    }
+                }
                 let text = tumble::validate::docs::markdown(&reports, quick, &date, &machine, wall);
                 if let Err(e) = std::fs::write(&file, text) {
                     eprintln!("error: cannot write {}: {e}", file.display());
