@@ -7,7 +7,7 @@ use tumble::io::output::peak_memory_bytes;
 use tumble::run::{RunOptions, run_scene};
 use tumble::scene::{Scene, SceneError, ValidScene};
 use tumble::sim::engine::Simulation;
-use tumble::validate::{CASES, run_case};
+use tumble::validate::{CASES, find_case};
 
 #[derive(Parser)]
 #[command(
@@ -57,13 +57,22 @@ enum Command {
         /// The scene file (RON).
         scene: PathBuf,
     },
-    /// Rerun the validation cases and compare with analytic and published values.
+    /// Rerun the validation cases and compare with analytic and published values: the full
+    /// tier by default, the quick tier (what `cargo test --release` runs) with --quick.
     Validate {
         /// Cases to run (default: all).
         cases: Vec<String>,
-        /// Reduced resolution versions (as run in CI).
+        /// Reduced versions: the quick tier (as `cargo test --release` runs it).
         #[arg(long)]
         quick: bool,
+        /// List the cases (name, run time of the full and quick versions, reference) and run
+        /// nothing.
+        #[arg(long)]
+        list: bool,
+        /// Write the results as Markdown to FILE (e.g. docs/validation.md): every case's rows,
+        /// the date, the machine and the wall time.
+        #[arg(long, value_name = "FILE")]
+        write_docs: Option<PathBuf>,
         /// Write the PNG plots (measured curves over their references) to DIR, as
         /// `<case>[-quick]-<name>.png`.
         #[arg(long, value_name = "DIR", default_value = "validation")]
@@ -200,30 +209,97 @@ fn main() -> ExitCode {
         Command::Validate {
             cases,
             quick,
+            list,
+            write_docs,
             plots,
         } => {
-            let cases: Vec<String> = if cases.is_empty() {
-                CASES.iter().map(|s| s.to_string()).collect()
-            } else {
-                cases
-            };
-            let mut failed = 0;
-            for case in &cases {
-                match run_case(case, quick) {
-                    Ok(rep) => {
-                        println!("{rep}");
-                        write_validation_plots(&rep, &plots);
-                        if !rep.passed() {
-                            failed += 1;
-                        }
-                    }
-                    Err(e) => {
-                        println!("== {case}\n  error: {e:#}\nFAIL {case}");
-                        failed += 1;
+            if list {
+                for c in CASES {
+                    println!(
+                        "{}: {}\n    reference: {}\n    full ({}): {}\n    quick ({}): {}",
+                        c.name,
+                        c.description,
+                        c.reference,
+                        c.full_time,
+                        c.full,
+                        c.quick_time,
+                        c.quick
+                    );
+                }
+                return ExitCode::SUCCESS;
+            }
+            let mut selected = Vec::new();
+            for name in &cases {
+                match find_case(name) {
+                    Some(c) => selected.push(c),
+                    None => {
+                        println!(
+                            "== {name}\n  error: unknown validation case `{name}`; the cases are: {}\nFAIL {name}",
+                            CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
+                        );
+                        return ExitCode::from(1);
                     }
                 }
             }
-            println!("{} passed, {} failed", cases.len() - failed, failed);
+            if cases.is_empty() {
+                selected = CASES.iter().collect();
+            }
+            let start = std::time::Instant::now();
+            let mut reports = Vec::new();
+            for case in selected {
+                let rep = case.run(quick);
+                println!("{rep}");
+                println!("  ({:.1} s)", rep.seconds);
+                write_validation_plots(&rep, &plots);
+                reports.push(rep);
+            }
+            let wall = start.elapsed().as_secs_f64();
+            let failed = reports.iter().filter(|r| !r.passed()).count();
+            println!(
+                "{} passed, {} failed ({wall:.1} s)",
+                reports.len() - failed,
+                failed
+            );
+            if let Some(file) = write_docs {
+                let date = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map(|d| tumble::validate::docs::utc_date(d.as_secs()))
+                    .unwrap_or_else(|_| "unknown".into());
+                let mut machine = format!(
+                    "nproc {}, {} worker threads",
+                    std::thread::available_parallelism().map_or(0, |n| n.get()),
+                    rayon::current_num_threads()
+                );
+                // On Linux: the load at the end (other work inflates the wall times) and the
+                // CPU time of this run (user + system, /proc/self/stat fields 14 and 15 in
+                // clock ticks of 1/100 s).
+                if let Ok(load) = std::fs::read_to_string("/proc/loadavg") {
+                    let l: Vec<&str> = load.split_whitespace().take(3).collect();
+                    machine += &format!("; load average {} at the end", l.join(" "));
+                }
+                if let Ok(stat) = std::fs::read_to_string("/proc/self/stat")
+                    && let Some(rest) = stat.rsplit(')').next()
+                {
+                    let f: Vec<f64> = rest
+                        .split_whitespace()
+                        .skip(11)
+                        .take(2)
+                        .filter_map(|x| x.parse().ok())
+                        .collect();
+                    if f.len() == 2 {
+                        machine += &format!(
+                            "; CPU time of the run {:.1} s (user + system)",
+                            (f[0] + f[1]) / 100.0
+                        );
+                    }
+                }
+                let text = tumble::validate::docs::markdown(&reports, quick, &date, &machine, wall);
+                if let Err(e) = std::fs::write(&file, text) {
+                    eprintln!("error: cannot write {}: {e}", file.display());
+                    return ExitCode::from(1);
+                }
+                println!("wrote {}", file.display());
+            }
             if failed > 0 {
                 ExitCode::from(1)
             } else {
