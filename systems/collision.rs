@@ -38,7 +38,7 @@
 //! evaluated in parallel and added in a fixed order, so results do not depend on the thread
 //! count.
 
-use crate::base::fields::{SimTime, SystemTimer, Timings};
+use crate::base::fields::SimTime;
 use crate::base::grid::Grid;
 use crate::bodies::contact::ContactParams;
 use crate::bodies::{
@@ -211,9 +211,7 @@ pub fn collision(
     mut contacts: ResMut<Contacts>,
     bodies: BodyQuery,
     mut states: Query<&mut ContactState>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let eps = cp.eps;
     let cut = cp.range * eps;
     // The patch reaches only a few cells beyond the body (`level_sets::patch_reach`): grow its
@@ -439,7 +437,6 @@ pub fn collision(
             }),
         }
     }
-    timer.stop(&mut timings, "collision");
 }
 
 /// Contact (section 3.2): the body average of the collision force goes straight into the
@@ -695,4 +692,28 @@ fn directed(
         out.any = true;
     }
     out
+}
+
+/// Contact forces (every run with bodies), applied as impulses to the rigid velocities
+/// in a fluid run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CollisionPlugin;
+
+impl crate::schedule::Plugin for CollisionPlugin {
+    fn name(&self) -> &'static str {
+        "collision"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let mode = ctx.mode();
+        if mode.has_bodies() {
+            ctx.insert_resource(Contacts::with_capacity(mode.bodies));
+            ctx.add_system(PhysicsSet::Collision, "collision", collision)?;
+            if mode.fluid() {
+                ctx.add_system(PhysicsSet::Collision, "contact_impulse", contact_impulse)?;
+            }
+        }
+        Ok(())
+    }
 }

@@ -7,7 +7,7 @@
 //! do not accumulate. Only the nodes of the box the body (plus a band) can reach are sampled;
 //! χ_i = H_ε(φ_i) is the smoothed Heaviside of half-width ε = `interface_cells` h.
 
-use crate::base::fields::{Params, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Params, SimTime};
 use crate::base::grid::Grid;
 use crate::bodies::{Body, BodyShape, GridPatch, RigidState, heaviside};
 use crate::systems::diagnostics::Diagnostics;
@@ -22,9 +22,7 @@ pub fn level_sets(
     time: Res<SimTime>,
     mut bodies: Query<(&Body, &RigidState, &BodyShape, &mut GridPatch)>,
     mut diag: ResMut<Diagnostics>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let eps = params.interface_cells * grid.h;
     for (body, state, shape, mut patch) in &mut bodies {
         if body.is_static() && patch.sampled {
@@ -47,7 +45,6 @@ pub fn level_sets(
         }
         sample(&grid, state, shape, &mut patch, eps);
     }
-    timer.stop(&mut timings, "level_sets");
 }
 
 /// How far beyond a body (length) its patch reaches: χ = H_ε(φ) is non-zero for φ > -ε, and the
@@ -136,4 +133,22 @@ pub fn sample(grid: &Grid, state: &RigidState, shape: &BodyShape, patch: &mut Gr
             }
         });
     patch.sampled = true;
+}
+
+/// Samples each body's level set on the grid (every run with bodies).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LevelSetsPlugin;
+
+impl crate::schedule::Plugin for LevelSetsPlugin {
+    fn name(&self) -> &'static str {
+        "level_sets"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        if ctx.mode().has_bodies() {
+            ctx.add_system(PhysicsSet::LevelSets, "level_sets", level_sets)?;
+        }
+        Ok(())
+    }
 }
