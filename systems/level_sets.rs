@@ -43,7 +43,21 @@ pub fn level_sets(
                 ));
             }
         }
-        sample(&grid, state, shape, &mut patch, eps);
+        let outside = sample(&grid, state, shape, &mut patch, eps);
+        if let Some(axis) = outside
+            && diag.failure.is_none()
+        {
+            diag.failure = Some(format!(
+                "body `{}` reaches outside the periodic box along {} at step {} (t = {:.6}): \
+                 centre {:?}; its level set would be clipped at the box's last nodes, not \
+                 wrapped around; move it inside, enlarge the domain or add walls",
+                body.name,
+                ["x", "y", "z"][axis],
+                time.step,
+                time.t,
+                &state.center.to_array()[..grid.dim],
+            ));
+        }
     }
 }
 
@@ -56,39 +70,61 @@ pub fn patch_reach(grid: &Grid, eps: f64) -> f64 {
     eps + 2.0 * grid.h
 }
 
+/// The world-space box of a body's shape bounds `(blo, bhi)` (body frame, grown by the
+/// reference band) shrunk by `shrink`, in its current pose.
+fn world_box(
+    grid: &Grid,
+    state: &RigidState,
+    (blo, bhi): (DVec3, DVec3),
+    shrink: f64,
+) -> (DVec3, DVec3) {
+    let (mut blo, mut bhi) = (blo + DVec3::splat(shrink), bhi - DVec3::splat(shrink));
+    if grid.dim == 2 {
+        (blo.z, bhi.z) = (0.0, 0.0);
+    }
+    let mut wlo = DVec3::splat(f64::INFINITY);
+    let mut whi = DVec3::splat(f64::NEG_INFINITY);
+    for corner in 0..8 {
+        let p = DVec3::new(
+            if corner & 1 == 0 { blo.x } else { bhi.x },
+            if corner & 2 == 0 { blo.y } else { bhi.y },
+            if corner & 4 == 0 { blo.z } else { bhi.z },
+        );
+        let w = state.center + state.orientation * p;
+        wlo = wlo.min(w);
+        whi = whi.max(w);
+    }
+    (wlo, whi)
+}
+
 /// The box of grid nodes a body can affect in its current pose: its shape's bounds grown by
-/// `reach` (length).
+/// `reach` (length), clipped to the grid's nodes. Also the first axis along which the solid
+/// itself (its shape's bounds, φ ≤ 0) reaches beyond the span of the nodes: a patch is
+/// clipped there, not wrapped around the periodic box, so a part of the body would be lost.
+/// Only the band around the body (the interface half-width and the margin, a few cells) may
+/// be clipped; in the bundled scenes that happens where a body touches a wall that fills the
+/// box's edge.
 pub fn patch_box(
     grid: &Grid,
     state: &RigidState,
     shape: &BodyShape,
     reach: f64,
-) -> ([usize; 3], [usize; 3]) {
+) -> ([usize; 3], [usize; 3], Option<usize>) {
+    let mut outside = None;
     let mut lo = [0usize; 3];
     let mut dims = [1usize; 3];
     match shape.level_set.bounds() {
         None => {
             dims = grid.n;
         }
-        Some((blo, bhi)) => {
+        Some(bounds) => {
+            let band = shape.level_set.band();
+            let (slo, shi) = world_box(grid, state, bounds, band);
+            outside = (0..grid.dim).find(|&a| {
+                slo[a] < grid.origin[a] || shi[a] > grid.origin[a] + (grid.n[a] - 1) as f64 * grid.h
+            });
             // `bounds` are the shape's grown by the reference band; grow by `reach` instead.
-            let shrink = (shape.level_set.band() - reach).max(0.0);
-            let (mut blo, mut bhi) = (blo + DVec3::splat(shrink), bhi - DVec3::splat(shrink));
-            if grid.dim == 2 {
-                (blo.z, bhi.z) = (0.0, 0.0);
-            }
-            let mut wlo = DVec3::splat(f64::INFINITY);
-            let mut whi = DVec3::splat(f64::NEG_INFINITY);
-            for corner in 0..8 {
-                let p = DVec3::new(
-                    if corner & 1 == 0 { blo.x } else { bhi.x },
-                    if corner & 2 == 0 { blo.y } else { bhi.y },
-                    if corner & 4 == 0 { blo.z } else { bhi.z },
-                );
-                let w = state.center + state.orientation * p;
-                wlo = wlo.min(w);
-                whi = whi.max(w);
-            }
+            let (wlo, whi) = world_box(grid, state, bounds, (band - reach).max(0.0));
             for a in 0..grid.dim {
                 let i0 = ((wlo[a] - grid.origin[a]) / grid.h).ceil().max(0.0) as usize;
                 let i1 = ((whi[a] - grid.origin[a]) / grid.h).floor();
@@ -102,12 +138,19 @@ pub fn patch_box(
             }
         }
     }
-    (lo, dims)
+    (lo, dims, outside)
 }
 
-/// Sample φ and χ of one body on its patch.
-pub fn sample(grid: &Grid, state: &RigidState, shape: &BodyShape, patch: &mut GridPatch, eps: f64) {
-    let (lo, dims) = patch_box(grid, state, shape, patch_reach(grid, eps));
+/// Sample φ and χ of one body on its patch; returns the axis along which the patch was
+/// clipped by the box, if it was.
+pub fn sample(
+    grid: &Grid,
+    state: &RigidState,
+    shape: &BodyShape,
+    patch: &mut GridPatch,
+    eps: f64,
+) -> Option<usize> {
+    let (lo, dims, outside) = patch_box(grid, state, shape, patch_reach(grid, eps));
     patch.lo = lo;
     patch.dims = dims;
     let len = dims[0] * dims[1] * dims[2];
@@ -133,6 +176,7 @@ pub fn sample(grid: &Grid, state: &RigidState, shape: &BodyShape, patch: &mut Gr
             }
         });
     patch.sampled = true;
+    outside
 }
 
 /// Samples each body's level set on the grid (every run with bodies).
