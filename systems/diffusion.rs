@@ -7,7 +7,7 @@
 //! in the spectral solver for the Poisson system, which then needs no forward transform.
 
 use crate::base::fields::{Fields, Params, SimTime};
-use crate::solvers::spectral::Spectral;
+use crate::solvers::Spectral;
 use bevy_ecs::prelude::*;
 
 /// The diffusion system (skipped for an inviscid fluid; the Poisson solve then cleans the

@@ -8,7 +8,7 @@
 //! (for the mid-step extrapolation in transport and for ∂u/∂t in the baroclinic term).
 
 use crate::base::fields::{Fields, Params, SimTime};
-use crate::solvers::spectral::Spectral;
+use crate::solvers::Spectral;
 use bevy_ecs::prelude::*;
 
 /// The Poisson system.

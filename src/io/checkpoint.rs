@@ -47,7 +47,7 @@ use crate::io::output::atomic_write_with;
 use crate::scene::Scene;
 use crate::schedule::StateRecord;
 use crate::sim::engine::Simulation;
-use crate::solvers::spectral::Spectral;
+use crate::solvers::Spectral;
 use crate::systems::diagnostics::Diagnostics;
 use crate::systems::transport::TransportScratch;
 use glam::{DMat3, DQuat, DVec3};
