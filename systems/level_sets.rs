@@ -97,20 +97,20 @@ fn world_box(
     (wlo, whi)
 }
 
+/// Sides of a patch box cut off by the grid: `[axis][0]` below node 0, `[axis][1]` above
+/// node n - 1.
+pub type Clipped = [[bool; 2]; 3];
+
 /// The box of grid nodes a body can affect in its current pose: its shape's bounds grown by
-/// `reach` (length), clipped to the grid's nodes. Also the first axis along which the solid
-/// itself (its shape's bounds, φ ≤ 0) reaches beyond the span of the nodes: a patch is
-/// clipped there, not wrapped around the periodic box, so a part of the body would be lost.
-/// Only the band around the body (the interface half-width and the margin, a few cells) may
-/// be clipped; in the bundled scenes that happens where a body touches a wall that fills the
-/// box's edge.
+/// `reach` (length), clipped to the grid's nodes (a patch is not wrapped around the periodic
+/// box), and which sides were clipped.
 pub fn patch_box(
     grid: &Grid,
     state: &RigidState,
     shape: &BodyShape,
     reach: f64,
-) -> ([usize; 3], [usize; 3], Option<usize>) {
-    let mut outside = None;
+) -> ([usize; 3], [usize; 3], Clipped) {
+    let mut clipped = [[false; 2]; 3];
     let mut lo = [0usize; 3];
     let mut dims = [1usize; 3];
     match shape.level_set.bounds() {
@@ -118,16 +118,14 @@ pub fn patch_box(
             dims = grid.n;
         }
         Some(bounds) => {
-            let band = shape.level_set.band();
-            let (slo, shi) = world_box(grid, state, bounds, band);
-            outside = (0..grid.dim).find(|&a| {
-                slo[a] < grid.origin[a] || shi[a] > grid.origin[a] + (grid.n[a] - 1) as f64 * grid.h
-            });
             // `bounds` are the shape's grown by the reference band; grow by `reach` instead.
-            let (wlo, whi) = world_box(grid, state, bounds, (band - reach).max(0.0));
+            let shrink = (shape.level_set.band() - reach).max(0.0);
+            let (wlo, whi) = world_box(grid, state, bounds, shrink);
             for a in 0..grid.dim {
-                let i0 = ((wlo[a] - grid.origin[a]) / grid.h).ceil().max(0.0) as usize;
+                let f0 = ((wlo[a] - grid.origin[a]) / grid.h).ceil();
                 let i1 = ((whi[a] - grid.origin[a]) / grid.h).floor();
+                clipped[a] = [f0 < 0.0, i1 > (grid.n[a] - 1) as f64];
+                let i0 = f0.max(0.0) as usize;
                 let i1 = if i1 < 0.0 {
                     0
                 } else {
@@ -138,11 +136,14 @@ pub fn patch_box(
             }
         }
     }
-    (lo, dims, outside)
+    (lo, dims, clipped)
 }
 
-/// Sample φ and χ of one body on its patch; returns the axis along which the patch was
-/// clipped by the box, if it was.
+/// Sample φ and χ of one body on its patch. Returns the first axis along which the solid
+/// itself (φ > 0) reaches a clipped side of the patch: a part of the body then lies beyond
+/// the box's last nodes and would be lost (the patch is clipped, not wrapped). The band
+/// around a body (interface half-width and margin, a few cells) may be clipped: in the
+/// bundled scenes that happens where a body touches a wall that fills the box's edge.
 pub fn sample(
     grid: &Grid,
     state: &RigidState,
@@ -150,7 +151,7 @@ pub fn sample(
     patch: &mut GridPatch,
     eps: f64,
 ) -> Option<usize> {
-    let (lo, dims, outside) = patch_box(grid, state, shape, patch_reach(grid, eps));
+    let (lo, dims, clipped) = patch_box(grid, state, shape, patch_reach(grid, eps));
     patch.lo = lo;
     patch.dims = dims;
     let len = dims[0] * dims[1] * dims[2];
@@ -176,7 +177,29 @@ pub fn sample(
             }
         });
     patch.sampled = true;
-    outside
+    solid_on_clipped_side(&patch.phi, dims, &clipped)
+}
+
+/// The first axis with a node of φ > 0 on a clipped side of a patch of `dims` nodes.
+fn solid_on_clipped_side(phi: &[f64], dims: [usize; 3], clipped: &Clipped) -> Option<usize> {
+    (0..3).find(|&a| {
+        (0..2).any(|side| {
+            if !clipped[a][side] || dims[a] == 0 {
+                return false;
+            }
+            let layer = if side == 0 { 0 } else { dims[a] - 1 };
+            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+            (0..dims[b]).any(|ib| {
+                (0..dims[c]).any(|ic| {
+                    let mut ijk = [0; 3];
+                    ijk[a] = layer;
+                    ijk[b] = ib;
+                    ijk[c] = ic;
+                    phi[ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])] > 0.0
+                })
+            })
+        })
+    })
 }
 
 /// Samples each body's level set on the grid (every run with bodies).
