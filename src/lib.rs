@@ -2,15 +2,16 @@
 //! vortex level set method of Coquerelle & Cottet (J. Comput. Phys. 227, 2008).
 //!
 //! The engine is a `bevy_ecs` world: dense grids are resources, the physics steps are systems
-//! in one explicit schedule ([`sim::schedule`]), one file per system in `systems/`.
+//! in one explicit schedule ([`schedule`]), one file per system in `systems/`.
 //!
 //! The modules are layers; each uses only the ones above it in this list (a test checks it):
 //! - [`base`]: grid, fields, kernels, typed parameters;
 //! - [`solvers`]: the FFT engine and spectral operators;
 //! - [`bodies`]: shapes, level sets, body components, the contact kernel;
+//! - [`schedule`]: the named sets of a step, the plugin interface, timing, checkpoint state;
 //! - [`systems`]: the physics systems (one file each, in `systems/`);
 //! - [`scene`]: the RON scene format and its validation;
-//! - [`sim`]: the world built from a validated scene, the schedule, the engine;
+//! - [`sim`]: the world built from a validated scene, the engine;
 //! - [`io`]: snapshots, checkpoints, log, plots;
 //! - [`run`] and [`validate`]: the run driver and the validation cases (the CLI sits on top).
 
@@ -22,6 +23,7 @@ pub mod bodies;
 pub mod io;
 pub mod run;
 pub mod scene;
+pub mod schedule;
 pub mod sim;
 pub mod solvers;
 #[path = "../systems/mod.rs"]

@@ -17,7 +17,7 @@
 //! that grew as Δt shrank (terminal velocity +23% from Δt = 1.5e-3 to 3.75e-4 at h = 1/128),
 //! while with the rigid acceleration the fall does not depend on Δt.
 
-use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::{BodyCoupling, InterfaceAcceleration};
 use crate::bodies::{
@@ -35,9 +35,7 @@ pub fn baroclinic(
     mut fields: ResMut<Fields>,
     mut bf: ResMut<BodyFields>,
     bodies: Query<(&Body, &RigidState, &PreviousVelocity, &Material)>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let dt = time.dt;
     let rigid = params.interface_acceleration == InterfaceAcceleration::Rigid;
     let momentum = params.body_coupling == BodyCoupling::Momentum;
@@ -145,5 +143,23 @@ pub fn baroclinic(
     });
     fields.u = u;
     fields.u_prev = u_prev;
-    timer.stop(&mut timings, "baroclinic");
+}
+
+/// Baroclinic vorticity generation (a fluid run with bodies).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct BaroclinicPlugin;
+
+impl crate::schedule::Plugin for BaroclinicPlugin {
+    fn name(&self) -> &'static str {
+        "baroclinic"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let mode = ctx.mode();
+        if mode.fluid() && mode.has_bodies() {
+            ctx.add_system(PhysicsSet::Baroclinic, "baroclinic", baroclinic)?;
+        }
+        Ok(())
+    }
 }

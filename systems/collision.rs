@@ -38,7 +38,7 @@
 //! evaluated in parallel and added in a fixed order, so results do not depend on the thread
 //! count.
 
-use crate::base::fields::{SimTime, SystemTimer, Timings};
+use crate::base::fields::SimTime;
 use crate::base::grid::Grid;
 use crate::bodies::contact::ContactParams;
 use crate::bodies::{
@@ -203,7 +203,9 @@ type BodyQuery<'w, 's> = Query<
     ),
 >;
 
-/// The collision system.
+/// The collision system: the bodies' boxes, the broad phase, the pair forces (narrow
+/// phase), one pair potential for two dynamic bodies, and the accumulation of the forces
+/// into each body's [`ContactState`] with one record per close pair.
 pub fn collision(
     grid: Res<Grid>,
     time: Res<SimTime>,
@@ -211,17 +213,36 @@ pub fn collision(
     mut contacts: ResMut<Contacts>,
     bodies: BodyQuery,
     mut states: Query<&mut ContactState>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let eps = cp.eps;
     let cut = cp.range * eps;
+    let c = &mut *contacts;
+    body_boxes(&grid, cut, c, &bodies, &states);
+    for mut s in &mut states {
+        s.force = DVec3::ZERO;
+        s.torque = DVec3::ZERO;
+        s.potential = 0.0;
+    }
+    broad_phase(&grid, &cp, cut, c, &bodies);
+    pair_forces(&grid, &cp, time.dt, eps, cut, c, &bodies);
+    one_potential_per_dynamic_pair(c, &bodies);
+    accumulate(c, &mut states);
+}
+
+/// Each body's box for the broad phase (sorted by id): its grid patch grown by the contact
+/// range, its bounding radius, centre and κ; no box for an unbounded body.
+fn body_boxes(
+    grid: &Grid,
+    cut: f64,
+    c: &mut Contacts,
+    bodies: &BodyQuery,
+    states: &Query<&mut ContactState>,
+) {
     // The patch reaches only a few cells beyond the body (`level_sets::patch_reach`): grow its
     // box by the whole contact range, plus a cell for the node rounding.
     let grow = cut + grid.h;
-    let c = &mut *contacts;
     c.boxes.clear();
-    for (entity, body, state, shape, patch, _, points) in &bodies {
+    for (entity, body, state, shape, patch, _, points) in bodies {
         let kappa = states.get(entity).map(|s| s.kappa).unwrap_or(0.0);
         let (aabb, radius) = match shape.level_set.bounds() {
             Some((lo, hi)) => {
@@ -251,12 +272,13 @@ pub fn collision(
         });
     }
     c.boxes.sort_unstable_by_key(|b| b.id);
-    for mut s in &mut states {
-        s.force = DVec3::ZERO;
-        s.torque = DVec3::ZERO;
-        s.potential = 0.0;
-    }
-    // Broad phase: directed pairs (receiver, source, κ); the receiver is dynamic.
+}
+
+/// Broad phase: the directed pairs (receiver, source, κ) whose boxes and grown bounding
+/// spheres overlap (sweep and prune along x), plus every dynamic body against each unbounded
+/// one it is near; the receiver is dynamic. In a fixed order: by unordered pair, then
+/// receiver.
+fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodies: &BodyQuery) {
     c.pairs.clear();
     c.order.clear();
     c.order
@@ -315,10 +337,20 @@ pub fn collision(
         let (a, b) = (boxes[r].id, boxes[s].id);
         (a.min(b), a.max(b), a)
     });
-    // Narrow phase, in parallel over directed pairs.
-    let dt = time.dt;
-    let grid = &*grid;
-    let bodies = &bodies;
+}
+
+/// Narrow phase, in parallel over the directed pairs: the force, torque and potential of each
+/// (sub-stepped over the step when `cp.predict`), into `c.results` in pair order.
+fn pair_forces(
+    grid: &Grid,
+    cp: &ContactParams,
+    dt: f64,
+    eps: f64,
+    cut: f64,
+    c: &mut Contacts,
+    bodies: &BodyQuery,
+) {
+    let boxes = &c.boxes;
     c.pairs
         .par_iter()
         .map(|&(r, s, kappa)| {
@@ -367,6 +399,12 @@ pub fn collision(
             )
         })
         .collect_into_vec(&mut c.results);
+}
+
+/// Two dynamic bodies: one pair potential for both (see below), written over the two
+/// directed results.
+fn one_potential_per_dynamic_pair(c: &mut Contacts, bodies: &BodyQuery) {
+    let boxes = &c.boxes;
     // Two dynamic bodies: one pair potential for both. Each direction is the exact gradient of
     // its own band's potential U_ij (i's band in φ_j), and the two discrete potentials are not
     // equal (the band is about one lattice spacing thick), so using each alone breaks
@@ -411,7 +449,12 @@ pub fn collision(
             out.gap = gap;
         }
     }
-    // Sum in the fixed pair order; one record per unordered close pair.
+}
+
+/// Sum the pair results into each receiver's [`ContactState`], in the fixed pair order; one
+/// record per unordered close pair.
+fn accumulate(c: &mut Contacts, states: &mut Query<&mut ContactState>) {
+    let boxes = &c.boxes;
     c.records.clear();
     for (&(r, s, _), res) in c.pairs.iter().zip(&c.results) {
         if !res.any {
@@ -439,7 +482,6 @@ pub fn collision(
             }),
         }
     }
-    timer.stop(&mut timings, "collision");
 }
 
 /// Contact (section 3.2): the body average of the collision force goes straight into the
@@ -695,4 +737,28 @@ fn directed(
         out.any = true;
     }
     out
+}
+
+/// Contact forces (every run with bodies), applied as impulses to the rigid velocities
+/// in a fluid run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CollisionPlugin;
+
+impl crate::schedule::Plugin for CollisionPlugin {
+    fn name(&self) -> &'static str {
+        "collision"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let mode = ctx.mode();
+        if mode.has_bodies() {
+            ctx.insert_resource(Contacts::with_capacity(mode.bodies));
+            ctx.add_system(PhysicsSet::Collision, "collision", collision)?;
+            if mode.fluid() {
+                ctx.add_system(PhysicsSet::Collision, "contact_impulse", contact_impulse)?;
+            }
+        }
+        Ok(())
+    }
 }

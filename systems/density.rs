@@ -5,7 +5,7 @@
 //! Also keeps Σχ_i and the union level set max_i φ_i for output, and at each node the body
 //! whose level set is the largest there (its owner, for the baroclinic term).
 
-use crate::base::fields::{Params, SystemTimer, Timings};
+use crate::base::fields::Params;
 use crate::base::grid::Grid;
 use crate::bodies::{Body, BodyFields, GridPatch, Material, NO_BODY};
 use bevy_ecs::prelude::*;
@@ -17,9 +17,7 @@ pub fn density(
     params: Res<Params>,
     bodies: Query<(&Body, &Material, &GridPatch)>,
     mut out: ResMut<BodyFields>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let rho_f = params.rho_fluid;
     let out = &mut *out;
     out.rho.par_iter_mut().for_each(|r| *r = rho_f);
@@ -62,5 +60,23 @@ pub fn density(
             }
         });
     }
-    timer.stop(&mut timings, "density");
+}
+
+/// Characteristic functions and density (a fluid run with bodies).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct DensityPlugin;
+
+impl crate::schedule::Plugin for DensityPlugin {
+    fn name(&self) -> &'static str {
+        "density"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let mode = ctx.mode();
+        if mode.fluid() && mode.has_bodies() {
+            ctx.add_system(PhysicsSet::Density, "density", density)?;
+        }
+        Ok(())
+    }
 }

@@ -13,7 +13,7 @@
 //! Sums are taken per grid row and then added in row order, so they do not depend on the
 //! number of threads.
 
-use crate::base::fields::{Fields, Params, Sample, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Fields, Params, Sample, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::TimeStep;
 use bevy_ecs::prelude::*;
@@ -230,9 +230,7 @@ pub fn diagnostics(
     fields: Res<Fields>,
     mut time: ResMut<SimTime>,
     mut diag: ResMut<Diagnostics>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     time.t += time.dt;
     time.step += 1;
     let (mut s, nan_at, wmax_at) = diag.measure(&grid, &fields);
@@ -265,5 +263,26 @@ pub fn diagnostics(
     }
     diag.sample = s;
     time.dt = next_dt(&params, &s, grid.h, diag.dt_fallback, time.t, time.stop_at);
-    timer.stop(&mut timings, "diagnostics");
+}
+
+/// Clock, time step and global quantities: the first dt at startup, then every step.
+/// The fallback step is a hundredth of the end time the run starts with.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct DiagnosticsPlugin;
+
+impl crate::schedule::Plugin for DiagnosticsPlugin {
+    fn name(&self) -> &'static str {
+        "diagnostics"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let end = ctx.world.resource::<SimTime>().stop_at;
+        let grid = ctx.world.resource::<Grid>();
+        let diag = Diagnostics::new(grid, end.map_or(f64::INFINITY, |t| t / 100.0));
+        ctx.insert_resource(diag);
+        ctx.add_startup_system("diagnostics_init", diagnostics_init)?;
+        ctx.add_system(PhysicsSet::Diagnostics, "diagnostics", diagnostics)?;
+        Ok(())
+    }
 }

@@ -6,8 +6,8 @@
 //! removes the divergence of ω (ω̂ ← ω̂ - k (k·ω̂)/|k|²). The transform of the result is left
 //! in the spectral solver for the Poisson system, which then needs no forward transform.
 
-use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::solvers::spectral::Spectral;
+use crate::base::fields::{Fields, Params, SimTime};
+use crate::solvers::Spectral;
 use bevy_ecs::prelude::*;
 
 /// The diffusion system (skipped for an inviscid fluid; the Poisson solve then cleans the
@@ -17,13 +17,29 @@ pub fn diffusion(
     time: Res<SimTime>,
     mut fields: ResMut<Fields>,
     mut spectral: ResMut<Spectral>,
-    mut timings: ResMut<Timings>,
 ) {
     if params.nu == 0.0 {
         return;
     }
-    let timer = SystemTimer::start();
     let (omega, _, version) = fields.next_version_parts();
     spectral.diffuse(omega, params.nu * time.dt, version);
-    timer.stop(&mut timings, "diffusion");
+}
+
+/// Implicit diffusion (a fluid run).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct DiffusionPlugin;
+
+impl crate::schedule::Plugin for DiffusionPlugin {
+    fn name(&self) -> &'static str {
+        "diffusion"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        ctx.share_resource(|w| Spectral::new(w.resource::<crate::base::grid::Grid>()));
+        if ctx.mode().fluid() {
+            ctx.add_system(PhysicsSet::Diffusion, "diffusion", diffusion)?;
+        }
+        Ok(())
+    }
 }

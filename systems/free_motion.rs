@@ -12,7 +12,7 @@
 //! one (section 2.2, Fig. 1). The angular momentum is carried from step to step, so a free
 //! body's rotation conserves it while its inertia tensor turns with it.
 
-use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::bodies::{Body, ContactState, FreeMotion, GridPatch, Material, RigidState};
 use crate::systems::rigid_velocity::{BodySums, mass_properties};
@@ -35,9 +35,7 @@ pub fn free_motion(
         &mut FreeMotion,
         &mut RigidState,
     )>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let dt = time.dt;
     let g = DVec3::from_array(params.gravity);
     for (body, patch, mat, contact, mut free, mut state) in &mut bodies {
@@ -68,5 +66,22 @@ pub fn free_motion(
             state.angular_velocity = jr.inverse() * l;
         }
     }
-    timer.stop(&mut timings, "free_motion");
+}
+
+/// Motion under gravity and contact in vacuum, before the rigid update.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FreeMotionPlugin;
+
+impl crate::schedule::Plugin for FreeMotionPlugin {
+    fn name(&self) -> &'static str {
+        "free_motion"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        if ctx.mode().vacuum {
+            ctx.add_system(PhysicsSet::RigidUpdate, "free_motion", free_motion)?;
+        }
+        Ok(())
+    }
 }

@@ -7,7 +7,7 @@
 //! do not accumulate. Only the nodes of the box the body (plus a band) can reach are sampled;
 //! χ_i = H_ε(φ_i) is the smoothed Heaviside of half-width ε = `interface_cells` h.
 
-use crate::base::fields::{Params, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Params, SimTime};
 use crate::base::grid::Grid;
 use crate::bodies::{Body, BodyShape, GridPatch, RigidState, heaviside};
 use crate::systems::diagnostics::Diagnostics;
@@ -22,9 +22,7 @@ pub fn level_sets(
     time: Res<SimTime>,
     mut bodies: Query<(&Body, &RigidState, &BodyShape, &mut GridPatch)>,
     mut diag: ResMut<Diagnostics>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let eps = params.interface_cells * grid.h;
     for (body, state, shape, mut patch) in &mut bodies {
         if body.is_static() && patch.sampled {
@@ -45,9 +43,22 @@ pub fn level_sets(
                 ));
             }
         }
-        sample(&grid, state, shape, &mut patch, eps);
+        let outside = sample(&grid, state, shape, &mut patch, eps);
+        if let Some(axis) = outside
+            && diag.failure.is_none()
+        {
+            diag.failure = Some(format!(
+                "body `{}` reaches outside the periodic box along {} at step {} (t = {:.6}): \
+                 centre {:?}; its level set would be clipped at the box's last nodes, not \
+                 wrapped around; move it inside, enlarge the domain or add walls",
+                body.name,
+                ["x", "y", "z"][axis],
+                time.step,
+                time.t,
+                &state.center.to_array()[..grid.dim],
+            ));
+        }
     }
-    timer.stop(&mut timings, "level_sets");
 }
 
 /// How far beyond a body (length) its patch reaches: χ = H_ε(φ) is non-zero for φ > -ε, and the
@@ -59,42 +70,62 @@ pub fn patch_reach(grid: &Grid, eps: f64) -> f64 {
     eps + 2.0 * grid.h
 }
 
+/// The world-space box of a body's shape bounds `(blo, bhi)` (body frame, grown by the
+/// reference band) shrunk by `shrink`, in its current pose.
+fn world_box(
+    grid: &Grid,
+    state: &RigidState,
+    (blo, bhi): (DVec3, DVec3),
+    shrink: f64,
+) -> (DVec3, DVec3) {
+    let (mut blo, mut bhi) = (blo + DVec3::splat(shrink), bhi - DVec3::splat(shrink));
+    if grid.dim == 2 {
+        (blo.z, bhi.z) = (0.0, 0.0);
+    }
+    let mut wlo = DVec3::splat(f64::INFINITY);
+    let mut whi = DVec3::splat(f64::NEG_INFINITY);
+    for corner in 0..8 {
+        let p = DVec3::new(
+            if corner & 1 == 0 { blo.x } else { bhi.x },
+            if corner & 2 == 0 { blo.y } else { bhi.y },
+            if corner & 4 == 0 { blo.z } else { bhi.z },
+        );
+        let w = state.center + state.orientation * p;
+        wlo = wlo.min(w);
+        whi = whi.max(w);
+    }
+    (wlo, whi)
+}
+
+/// Sides of a patch box cut off by the grid: `[axis][0]` below node 0, `[axis][1]` above
+/// node n - 1.
+pub type Clipped = [[bool; 2]; 3];
+
 /// The box of grid nodes a body can affect in its current pose: its shape's bounds grown by
-/// `reach` (length).
+/// `reach` (length), clipped to the grid's nodes (a patch is not wrapped around the periodic
+/// box), and which sides were clipped.
 pub fn patch_box(
     grid: &Grid,
     state: &RigidState,
     shape: &BodyShape,
     reach: f64,
-) -> ([usize; 3], [usize; 3]) {
+) -> ([usize; 3], [usize; 3], Clipped) {
+    let mut clipped = [[false; 2]; 3];
     let mut lo = [0usize; 3];
     let mut dims = [1usize; 3];
     match shape.level_set.bounds() {
         None => {
             dims = grid.n;
         }
-        Some((blo, bhi)) => {
+        Some(bounds) => {
             // `bounds` are the shape's grown by the reference band; grow by `reach` instead.
             let shrink = (shape.level_set.band() - reach).max(0.0);
-            let (mut blo, mut bhi) = (blo + DVec3::splat(shrink), bhi - DVec3::splat(shrink));
-            if grid.dim == 2 {
-                (blo.z, bhi.z) = (0.0, 0.0);
-            }
-            let mut wlo = DVec3::splat(f64::INFINITY);
-            let mut whi = DVec3::splat(f64::NEG_INFINITY);
-            for corner in 0..8 {
-                let p = DVec3::new(
-                    if corner & 1 == 0 { blo.x } else { bhi.x },
-                    if corner & 2 == 0 { blo.y } else { bhi.y },
-                    if corner & 4 == 0 { blo.z } else { bhi.z },
-                );
-                let w = state.center + state.orientation * p;
-                wlo = wlo.min(w);
-                whi = whi.max(w);
-            }
+            let (wlo, whi) = world_box(grid, state, bounds, shrink);
             for a in 0..grid.dim {
-                let i0 = ((wlo[a] - grid.origin[a]) / grid.h).ceil().max(0.0) as usize;
+                let f0 = ((wlo[a] - grid.origin[a]) / grid.h).ceil();
                 let i1 = ((whi[a] - grid.origin[a]) / grid.h).floor();
+                clipped[a] = [f0 < 0.0, i1 > (grid.n[a] - 1) as f64];
+                let i0 = f0.max(0.0) as usize;
                 let i1 = if i1 < 0.0 {
                     0
                 } else {
@@ -105,12 +136,22 @@ pub fn patch_box(
             }
         }
     }
-    (lo, dims)
+    (lo, dims, clipped)
 }
 
-/// Sample φ and χ of one body on its patch.
-pub fn sample(grid: &Grid, state: &RigidState, shape: &BodyShape, patch: &mut GridPatch, eps: f64) {
-    let (lo, dims) = patch_box(grid, state, shape, patch_reach(grid, eps));
+/// Sample φ and χ of one body on its patch. Returns the first axis along which the solid
+/// itself (φ > 0) reaches a clipped side of the patch: a part of the body then lies beyond
+/// the box's last nodes and would be lost (the patch is clipped, not wrapped). The band
+/// around a body (interface half-width and margin, a few cells) may be clipped: in the
+/// bundled scenes that happens where a body touches a wall that fills the box's edge.
+pub fn sample(
+    grid: &Grid,
+    state: &RigidState,
+    shape: &BodyShape,
+    patch: &mut GridPatch,
+    eps: f64,
+) -> Option<usize> {
+    let (lo, dims, clipped) = patch_box(grid, state, shape, patch_reach(grid, eps));
     patch.lo = lo;
     patch.dims = dims;
     let len = dims[0] * dims[1] * dims[2];
@@ -136,4 +177,69 @@ pub fn sample(grid: &Grid, state: &RigidState, shape: &BodyShape, patch: &mut Gr
             }
         });
     patch.sampled = true;
+    solid_on_clipped_side(grid, state, shape, &patch.phi, (lo, dims), &clipped)
+}
+
+/// The first axis along which the solid (φ > 0) reaches the periodic box's boundary on a
+/// clipped side of the patch: below, node 0 lies on the boundary (`origin`); above, the
+/// boundary is the node one past the last (`origin + n h`, the image of node 0), where φ is
+/// evaluated directly. A body that reaches into the last cell but not to the boundary is
+/// inside the box (only its band wraps around, see [`sample`]).
+fn solid_on_clipped_side(
+    grid: &Grid,
+    state: &RigidState,
+    shape: &BodyShape,
+    phi: &[f64],
+    (lo, dims): ([usize; 3], [usize; 3]),
+    clipped: &Clipped,
+) -> Option<usize> {
+    let inv = state.orientation.inverse();
+    (0..grid.dim).find(|&a| {
+        (0..2).any(|side| {
+            if !clipped[a][side] || dims[a] == 0 {
+                return false;
+            }
+            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+            (0..dims[b]).any(|ib| {
+                (0..dims[c]).any(|ic| {
+                    let mut ijk = [0; 3];
+                    ijk[b] = ib;
+                    ijk[c] = ic;
+                    if side == 0 {
+                        ijk[a] = 0;
+                        phi[ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])] > 0.0
+                    } else {
+                        let mut x = [0.0; 3];
+                        for d in 0..3 {
+                            x[d] = grid.origin[d] + (lo[d] + ijk[d]) as f64 * grid.h;
+                        }
+                        x[a] = grid.origin[a] + grid.n[a] as f64 * grid.h;
+                        if grid.dim == 2 {
+                            x[2] = 0.0;
+                        }
+                        let w = DVec3::new(x[0], x[1], x[2]);
+                        shape.level_set.phi(inv * (w - state.center)) > 0.0
+                    }
+                })
+            })
+        })
+    })
+}
+
+/// Samples each body's level set on the grid (every run with bodies).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LevelSetsPlugin;
+
+impl crate::schedule::Plugin for LevelSetsPlugin {
+    fn name(&self) -> &'static str {
+        "level_sets"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        if ctx.mode().has_bodies() {
+            ctx.add_system(PhysicsSet::LevelSets, "level_sets", level_sets)?;
+        }
+        Ok(())
+    }
 }

@@ -1,7 +1,13 @@
-//! The physics systems, one file each, in schedule order (see `sim::schedule`).
+//! The physics systems, one file each, in schedule order (see `crate::schedule`).
 //!
 //! Each file opens with the equation it implements and the paper's equation number
-//! (Coquerelle & Cottet, J. Comput. Phys. 227 (2008)).
+//! (Coquerelle & Cottet, J. Comput. Phys. 227 (2008)), and ends with its plugin: the
+//! resources it needs, its systems and their sets. [`builtin`] lists them all, once.
+//!
+//! A new system is one file here and one line in [`builtin`] (or, outside the crate, one
+//! `Simulation::builder(scene).add_plugin(..)` call; see `examples/passive_scalar.rs`).
+
+use crate::schedule::Plugin;
 
 pub mod baroclinic;
 pub mod collision;
@@ -15,3 +21,22 @@ pub mod poisson;
 pub mod rigid_update;
 pub mod rigid_velocity;
 pub mod transport;
+
+/// The built-in plugins. Within a set, systems run in this order; each plugin decides from
+/// the run's [`crate::schedule::Mode`] which of its systems a run needs.
+pub fn builtin() -> Vec<Box<dyn Plugin>> {
+    vec![
+        Box::new(level_sets::LevelSetsPlugin),
+        Box::new(density::DensityPlugin),
+        Box::new(rigid_velocity::RigidVelocityPlugin),
+        Box::new(collision::CollisionPlugin),
+        Box::new(penalization::PenalizationPlugin),
+        Box::new(baroclinic::BaroclinicPlugin),
+        Box::new(transport::TransportPlugin),
+        Box::new(diffusion::DiffusionPlugin),
+        Box::new(poisson::PoissonPlugin),
+        Box::new(free_motion::FreeMotionPlugin),
+        Box::new(rigid_update::RigidUpdatePlugin),
+        Box::new(diagnostics::DiagnosticsPlugin),
+    ]
+}

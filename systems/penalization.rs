@@ -27,7 +27,7 @@
 //! 1.51, even with the body's extra mass moved into the mask), so their rigid region stays
 //! the whole smoothed band, the same χ as their density and mass.
 
-use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, component_ptrs};
 use crate::base::params::BodyCoupling;
 use crate::bodies::{Body, BodyFields, GridPatch, Hydro, RigidState};
@@ -46,9 +46,7 @@ pub fn penalization(
     mut bf: ResMut<BodyFields>,
     mut sums: ResMut<BodySums>,
     mut bodies: Query<(&Body, &GridPatch, &RigidState, &mut Hydro)>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let dt = time.dt;
     let ldt = params.lambda * dt;
     let dim = grid.dim;
@@ -141,7 +139,6 @@ pub fn penalization(
         }
     }
     curl_add(&grid, &bf.du, fields.omega_mut());
-    timer.stop(&mut timings, "penalization");
 }
 
 /// ω += ∇×a by centred differences (periodic).
@@ -196,4 +193,23 @@ pub fn curl_add(grid: &Grid, a: &[Vec<f64>], omega: &mut [Vec<f64>]) {
                 }
             }
         });
+}
+
+/// Implicit penalization (a fluid run with bodies).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PenalizationPlugin;
+
+impl crate::schedule::Plugin for PenalizationPlugin {
+    fn name(&self) -> &'static str {
+        "penalization"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let mode = ctx.mode();
+        if mode.fluid() && mode.has_bodies() {
+            ctx.add_system(PhysicsSet::Penalization, "penalization", penalization)?;
+        }
+        Ok(())
+    }
 }

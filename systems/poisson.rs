@@ -7,8 +7,8 @@
 //! uniform background velocity. The velocity it replaces is kept as the previous velocity
 //! (for the mid-step extrapolation in transport and for ∂u/∂t in the baroclinic term).
 
-use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
-use crate::solvers::spectral::Spectral;
+use crate::base::fields::{Fields, Params, SimTime};
+use crate::solvers::Spectral;
 use bevy_ecs::prelude::*;
 
 /// The Poisson system.
@@ -17,13 +17,30 @@ pub fn poisson(
     time: Res<SimTime>,
     mut fields: ResMut<Fields>,
     mut spectral: ResMut<Spectral>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let fields = &mut *fields;
     std::mem::swap(&mut fields.u, &mut fields.u_prev);
     fields.dt_prev = time.dt;
     let (omega, u, version) = fields.same_version_parts();
     spectral.velocity(omega, version, params.background, u);
-    timer.stop(&mut timings, "poisson");
+}
+
+/// Velocity from vorticity: at startup in every run, every step in a fluid run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PoissonPlugin;
+
+impl crate::schedule::Plugin for PoissonPlugin {
+    fn name(&self) -> &'static str {
+        "poisson"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        ctx.share_resource(|w| Spectral::new(w.resource::<crate::base::grid::Grid>()));
+        ctx.add_startup_system("poisson", poisson)?;
+        if ctx.mode().fluid() {
+            ctx.add_system(PhysicsSet::Poisson, "poisson", poisson)?;
+        }
+        Ok(())
+    }
 }

@@ -8,7 +8,7 @@
 //! kinematic bodies their prescribed motion, static bodies stay. The velocities used are kept
 //! as the next step's previous velocity ([`PreviousVelocity`]).
 
-use crate::base::fields::{SimTime, SystemTimer, Timings};
+use crate::base::fields::SimTime;
 use crate::bodies::{Body, PreviousVelocity, RigidState, kinematic_velocity};
 use bevy_ecs::prelude::*;
 use glam::DQuat;
@@ -17,9 +17,7 @@ use glam::DQuat;
 pub fn rigid_update(
     time: Res<SimTime>,
     mut bodies: Query<(&Body, &mut RigidState, &mut PreviousVelocity)>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let dt = time.dt;
     for (body, mut s, mut prev) in &mut bodies {
         if body.is_static() {
@@ -44,5 +42,23 @@ pub fn rigid_update(
         // A free body turns about its centroid, which moves with V.
         *s = s.advanced(dt);
     }
-    timer.stop(&mut timings, "rigid_update");
+}
+
+/// Moves the bodies (every run with bodies; always in vacuum).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RigidUpdatePlugin;
+
+impl crate::schedule::Plugin for RigidUpdatePlugin {
+    fn name(&self) -> &'static str {
+        "rigid_update"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let mode = ctx.mode();
+        if mode.vacuum || mode.has_bodies() {
+            ctx.add_system(PhysicsSet::RigidUpdate, "rigid_update", rigid_update)?;
+        }
+        Ok(())
+    }
 }

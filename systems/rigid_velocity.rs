@@ -32,7 +32,7 @@
 //! (section 3.2). Kinematic bodies take their prescribed motion; static ones stay at rest. Sums are taken per
 //! patch row and added in row order (thread-count independent).
 
-use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::BodyCoupling;
 use crate::bodies::{Body, GridPatch, Hydro, Material, RigidState, kinematic_velocity};
@@ -180,9 +180,7 @@ pub fn rigid_velocity(
     fields: Res<Fields>,
     mut sums: ResMut<BodySums>,
     mut bodies: Query<(&Body, &GridPatch, &Material, &mut RigidState, &mut Hydro)>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let momentum = params.body_coupling == BodyCoupling::Momentum;
     let g = DVec3::from_array(params.gravity);
     for (body, patch, mat, mut state, mut hydro) in &mut bodies {
@@ -251,7 +249,6 @@ pub fn rigid_velocity(
             torque: l_fluid / dt,
         };
     }
-    timer.stop(&mut timings, "rigid_velocity");
 }
 
 /// J⁻¹ l: in 2D about z only (J_zz); zero where J is singular (an empty body).
@@ -263,5 +260,30 @@ fn solve_inertia(dim: usize, j: DMat3, l: DVec3) -> DVec3 {
         j.inverse() * l
     } else {
         DVec3::ZERO
+    }
+}
+
+/// Rigid velocities from the flow (a fluid run with bodies); its per-body sums are there in
+/// every run with bodies.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RigidVelocityPlugin;
+
+impl crate::schedule::Plugin for RigidVelocityPlugin {
+    fn name(&self) -> &'static str {
+        "rigid_velocity"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let mode = ctx.mode();
+        if mode.has_bodies() {
+            // Also the scratch of free_motion in vacuum.
+            let sums = BodySums::new(ctx.world.resource::<Grid>());
+            ctx.insert_resource(sums);
+        }
+        if mode.fluid() && mode.has_bodies() {
+            ctx.add_system(PhysicsSet::RigidVelocity, "rigid_velocity", rigid_velocity)?;
+        }
+        Ok(())
     }
 }

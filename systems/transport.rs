@@ -29,7 +29,7 @@
 //! Nodes whose vorticity is at or below the cutoff create no particle: their vorticity stays
 //! where it is (circulation is kept; the error is of the size of the cutoff).
 
-use crate::base::fields::{Fields, Params, SimTime, SystemTimer, Timings};
+use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, component_ptrs};
 use crate::base::kernels::{lambda42_weights, m4prime_weights, split};
 use crate::base::params::RemeshKernel;
@@ -104,9 +104,7 @@ pub fn transport(
     time: Res<SimTime>,
     mut fields: ResMut<Fields>,
     mut scratch: ResMut<TransportScratch>,
-    mut timings: ResMut<Timings>,
 ) {
-    let timer = SystemTimer::start();
     let dt = time.dt;
     let fields = &mut *fields;
     let max_omega = max_norm(fields.omega());
@@ -154,7 +152,6 @@ pub fn transport(
         stretch(&grid, dt, omega, u);
     }
     scratch.reverse = !scratch.reverse;
-    timer.stop(&mut timings, "transport");
 }
 
 /// max over nodes of |ω| (Euclidean norm in 3D).
@@ -475,5 +472,26 @@ fn push_remesh_line<const N: usize, const LEFT: i64, const NC: usize>(
                 }
             }
         }
+    }
+}
+
+/// Particle transport (a fluid run); its scratch, which holds the split order a
+/// checkpoint keeps, is there in every run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TransportPlugin;
+
+impl crate::schedule::Plugin for TransportPlugin {
+    fn name(&self) -> &'static str {
+        "transport"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        let scratch = TransportScratch::new(ctx.world.resource::<Grid>());
+        ctx.insert_resource(scratch);
+        if ctx.mode().fluid() {
+            ctx.add_system(PhysicsSet::Transport, "transport", transport)?;
+        }
+        Ok(())
     }
 }

@@ -220,6 +220,36 @@ fn body_outside_the_domain_is_rejected() {
 }
 
 #[test]
+fn body_reaching_outside_the_periodic_box_stops_the_run_naming_it() {
+    // Centre inside, but the disk (r = 0.1) crosses the box's edge (the last node is at
+    // 31/32): its level-set patch would be clipped, not wrapped, losing part of the body. The
+    // run stops at the first step with an error naming the body and the axis.
+    for (pos, axis) in [("[0.08, 0.5]", "along x"), ("[0.5, 0.92]", "along y")] {
+        let mut s = sim(&format!(
+            r#"Scene(
+            domain: (extent: [1.0, 1.0], cells: [32, 32]),
+            numerics: (dt: Fixed(0.001), end_time: 1.0),
+            bodies: [(name: "edge-disk", shape: Disk(radius: 0.1), position: {pos})],
+        )"#
+        ));
+        let e = s.step().unwrap_err().to_string();
+        assert!(e.contains("`edge-disk`"), "{e}");
+        assert!(
+            e.contains("outside the periodic box") && e.contains(axis),
+            "{e}"
+        );
+    }
+    // A body inside the nodes runs, even with its interface band at the edge: r = 0.1 at
+    // 0.11 from the edge.
+    let mut s = sim(r#"Scene(
+        domain: (extent: [1.0, 1.0], cells: [32, 32]),
+        numerics: (dt: Fixed(0.001), end_time: 1.0),
+        bodies: [(name: "inside", shape: Disk(radius: 0.1), position: [0.11, 0.5])],
+    )"#);
+    s.step().unwrap();
+}
+
+#[test]
 fn non_positive_density_and_size_are_rejected() {
     let base = r#"Scene(
         domain: (extent: [1.0, 1.0], cells: [32, 32]),

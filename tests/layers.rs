@@ -10,6 +10,7 @@ const LAYERS: &[&[&str]] = &[
     &["base"],
     &["solvers"],
     &["bodies"],
+    &["schedule"],
     &["systems"],
     &["scene"],
     &["sim"],

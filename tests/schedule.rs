@@ -1,10 +1,11 @@
 //! The schedule: the default one builds with ambiguity detection as an error, user systems
-//! hook into the empty First/Last sets, and an ambiguous pair is rejected.
+//! hook into the empty First/Last sets, an ambiguous pair is rejected (added by hand or
+//! through a plugin), and every plugin system is timed under its name.
 
 use bevy_ecs::prelude::*;
 use tumble::scene::Scene;
+use tumble::schedule::{PhysicsSet, Plugin, PluginContext, step_schedule};
 use tumble::sim::engine::Simulation;
-use tumble::sim::schedule::{PhysicsSet, step_schedule};
 
 const SCENE: &str = r#"Scene(
     domain: (extent: [1.0, 1.0], cells: [16, 16]),
@@ -22,12 +23,86 @@ struct Trace(Vec<&'static str>);
 #[test]
 fn default_schedule_builds_without_ambiguity() {
     let mut s = sim();
-    let mut sched = step_schedule();
-    sched
+    s.schedule
         .initialize(&mut s.world)
         .expect("default schedule builds");
     s.step().unwrap();
     assert!(s.time() > 0.0);
+}
+
+#[test]
+fn plugin_systems_are_timed_by_name() {
+    let mut s = sim();
+    s.step().unwrap();
+    let names: Vec<&str> = s.timings().last.iter().map(|e| e.0).collect();
+    // A fluid run without bodies: the fluid systems, in schedule order, each once.
+    assert_eq!(names, ["transport", "diffusion", "poisson", "diagnostics"]);
+    assert!(s.timings().last.iter().all(|e| e.1 >= 0.0));
+}
+
+/// A plugin writing `Trace` from the First set.
+struct Tracer;
+
+impl Plugin for Tracer {
+    fn name(&self) -> &'static str {
+        "tracer"
+    }
+    fn build(&self, ctx: &mut PluginContext) -> anyhow::Result<()> {
+        ctx.insert_resource(Trace::default());
+        ctx.add_system(PhysicsSet::First, "trace_a", |mut t: ResMut<Trace>| {
+            t.0.push("a")
+        })?;
+        // Same set, same resource: chained after trace_a by the plugin registration.
+        ctx.add_system(PhysicsSet::First, "trace_b", |mut t: ResMut<Trace>| {
+            t.0.push("b")
+        })
+    }
+}
+
+#[test]
+fn plugin_systems_in_one_set_are_ordered() {
+    let scene = Scene::parse(SCENE, "test", "test").unwrap();
+    let mut s = Simulation::builder(scene)
+        .add_plugin(Tracer)
+        .build()
+        .unwrap();
+    s.step().unwrap();
+    assert_eq!(s.world.resource::<Trace>().0, vec!["a", "b"]);
+}
+
+#[test]
+fn ambiguous_plugin_system_is_rejected() {
+    let mut s = {
+        let scene = Scene::parse(SCENE, "test", "test").unwrap();
+        Simulation::builder(scene)
+            .add_plugin(Tracer)
+            .build()
+            .unwrap()
+    };
+    // A hand-added system writing the same resource in the same set, unordered: an error.
+    s.schedule
+        .add_systems((|mut t: ResMut<Trace>| t.0.push("c")).in_set(PhysicsSet::First));
+    assert!(s.schedule.initialize(&mut s.world).is_err());
+}
+
+#[test]
+fn a_system_name_is_registered_once() {
+    struct Twice;
+    impl Plugin for Twice {
+        fn name(&self) -> &'static str {
+            "twice"
+        }
+        fn build(&self, ctx: &mut PluginContext) -> anyhow::Result<()> {
+            ctx.add_system(PhysicsSet::Last, "poisson", || {})
+        }
+    }
+    let scene = Scene::parse(SCENE, "test", "test").unwrap();
+    let err = Simulation::builder(scene)
+        .add_plugin(Twice)
+        .build()
+        .err()
+        .expect("a second `poisson` is refused");
+    assert!(format!("{err:#}").contains("twice"), "{err:#}");
 }
 
 #[test]

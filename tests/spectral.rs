@@ -1,4 +1,4 @@
-//! Integration tests of the periodic FFT solver (`tumble::solvers::spectral`).
+//! Integration tests of the periodic FFT engine and spectral operators (`tumble::solvers`).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -7,7 +7,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use tumble::base::grid::Grid;
-use tumble::solvers::spectral::*;
+use tumble::solvers::fft::*;
+use tumble::solvers::operators::*;
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting: only threads marked through `MARK` (the workers of a dedicated rayon pool

@@ -194,17 +194,3 @@ impl Timings {
         }
     }
 }
-
-/// Times a system from creation to drop.
-pub struct SystemTimer(std::time::Instant);
-
-impl SystemTimer {
-    /// Start timing.
-    pub fn start() -> Self {
-        SystemTimer(std::time::Instant::now())
-    }
-    /// Stop and record under `name`.
-    pub fn stop(self, timings: &mut Timings, name: &'static str) {
-        timings.record(name, self.0.elapsed().as_secs_f64());
-    }
-}

@@ -26,6 +26,11 @@
 //!   (for `fields.xmf`) and `series.h5`, written at every checkpoint, back from the run
 //!   directory (see [`crate::io::snapshots::Snapshots::resume`]).
 //!
+//! * the state the plugins registered ([`crate::schedule::PluginContext::checkpoint_resource`]):
+//!   one record per resource, its name, layout version and serde (postcard) bytes, so a new
+//!   system's state needs no encoder here. A record missing, left over or of another
+//!   version is refused by name.
+//!
 //! Format (little-endian): the magic `TUMBLECK`, the format version (u32), the tumble version
 //! (string), the CRC-32 of the scene text, the payload (f64 as raw bits, so values come back
 //! exactly), then a trailer: the byte length before it (u64), the CRC-32 of those bytes and
@@ -40,8 +45,9 @@ use crate::base::fields::{Fields, Sample, SimTime};
 use crate::bodies::{Body, ContactState, FreeMotion, Hydro, PreviousVelocity, RigidState};
 use crate::io::output::atomic_write_with;
 use crate::scene::{Scene, ValidScene};
+use crate::schedule::StateRecord;
 use crate::sim::engine::Simulation;
-use crate::solvers::spectral::Spectral;
+use crate::solvers::Spectral;
 use crate::systems::diagnostics::Diagnostics;
 use crate::systems::transport::TransportScratch;
 use glam::{DMat3, DQuat, DVec3};
@@ -56,7 +62,7 @@ pub const MAGIC: [u8; 8] = *b"TUMBLECK";
 /// Last bytes of every complete checkpoint.
 const END_MAGIC: [u8; 4] = *b"KEND";
 /// Version of the layout; a checkpoint of another format version is refused.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// The tumble version that writes (and alone restarts) these checkpoints.
 pub const CRATE_VERSION: &str = env!("CARGO_PKG_VERSION");
 
@@ -205,6 +211,8 @@ pub struct Checkpoint {
     pub dt_prev: f64,
     /// Bodies, by id.
     pub bodies: Vec<BodyState>,
+    /// The plugins' state records.
+    pub state: Vec<StateRecord>,
 }
 
 /// Little-endian writer that counts and checksums what it writes.
@@ -485,6 +493,15 @@ pub fn write_to(w: impl Write, sim: &mut Simulation, progress: &RunProgress) -> 
         e.vec3(b.prev.velocity)?;
         e.vec3(b.prev.angular_velocity)?;
     }
+    // Plugin state records.
+    let records = sim.save_state().map_err(io::Error::other)?;
+    e.u64(records.len() as u64)?;
+    for r in &records {
+        e.str(&r.name)?;
+        e.u32(r.version)?;
+        e.u64(r.bytes.len() as u64)?;
+        e.bytes(&r.bytes)?;
+    }
     // Trailer.
     let len = e.len;
     let crc = e.crc.clone().finalize();
@@ -622,6 +639,7 @@ impl Checkpoint {
             *f = s.free;
             *p = s.prev;
         }
+        sim.restore_state(&self.state).map_err(|m| self.error(m))?;
         Ok(())
     }
 }
@@ -782,6 +800,18 @@ fn decode(b: &[u8], file: &Path) -> Result<Checkpoint, String> {
             prev,
         });
     }
+    let nrec = d.len(16)?;
+    let mut state = Vec::with_capacity(nrec);
+    for _ in 0..nrec {
+        let name = d.str()?;
+        let version = d.u32()?;
+        let n = d.len(1)?;
+        state.push(StateRecord {
+            name,
+            version,
+            bytes: d.take(n)?.to_vec(),
+        });
+    }
     if d.pos != b.len() {
         return Err(format!(
             "corrupt data ({} unexpected bytes at the end)",
@@ -807,6 +837,7 @@ fn decode(b: &[u8], file: &Path) -> Result<Checkpoint, String> {
         u_prev,
         dt_prev,
         bodies,
+        state,
     })
 }
 

@@ -3,20 +3,42 @@
 use crate::base::fields::{Fields, Params, Sample, SimTime, Timings};
 use crate::base::grid::Grid;
 use crate::scene::ValidScene;
+use crate::schedule::{Mode, Plugin, Scheduler, StateRecord};
 use crate::sim::init::add_initial;
-use crate::sim::schedule::{startup_schedule, step_schedule_with, vacuum_schedule};
-use crate::solvers::spectral::Spectral;
 use crate::systems::diagnostics::Diagnostics;
-use crate::systems::transport::TransportScratch;
 use bevy_ecs::prelude::*;
 
 /// A running simulation.
 pub struct Simulation {
     /// The ECS world: resources (grid, fields, solvers) and, later, body entities.
     pub world: World,
-    /// The step schedule: add your own systems to it (see [`crate::sim::schedule`]).
+    /// The step schedule: add your own systems to it (see [`crate::schedule`]), or better,
+    /// a plugin through [`Simulation::builder`].
     pub schedule: Schedule,
+    scheduler: Scheduler,
     scene: ValidScene,
+}
+
+/// A simulation being set up: the scene and the plugins beyond the built-in ones.
+pub struct SimulationBuilder {
+    scene: ValidScene,
+    plugins: Vec<Box<dyn Plugin>>,
+}
+
+impl SimulationBuilder {
+    /// Add a plugin; it is built after the built-in ones (and the plugins added before it),
+    /// so within a set its systems run after theirs.
+    pub fn add_plugin(mut self, plugin: impl Plugin) -> Self {
+        self.plugins.push(Box::new(plugin));
+        self
+    }
+
+    /// Set up the world (see [`Simulation::new`]).
+    pub fn build(self) -> anyhow::Result<Simulation> {
+        let mut plugins = crate::systems::builtin();
+        plugins.extend(self.plugins);
+        Simulation::with_plugins(self.scene, &plugins)
+    }
 }
 
 impl Simulation {
@@ -24,6 +46,18 @@ impl Simulation {
     /// fields from the initial conditions, velocity from the Poisson solve, first time step. Fails if the schedule cannot be built or the
     /// initial state is not finite.
     pub fn new(scene: ValidScene) -> anyhow::Result<Self> {
+        Simulation::builder(scene).build()
+    }
+
+    /// A simulation of `scene` with more plugins than the built-in ones.
+    pub fn builder(scene: ValidScene) -> SimulationBuilder {
+        SimulationBuilder {
+            scene,
+            plugins: Vec::new(),
+        }
+    }
+
+    fn with_plugins(scene: ValidScene, plugins: &[Box<dyn Plugin>]) -> anyhow::Result<Self> {
         let grid = scene.grid();
         let mut world = World::new();
         let mut fields = Fields::new(&grid);
@@ -32,9 +66,6 @@ impl Simulation {
         }
         world.insert_resource(crate::sim::build::params(&scene));
         world.insert_resource(fields);
-        world.insert_resource(Spectral::new(&grid));
-        world.insert_resource(TransportScratch::new(&grid));
-        world.insert_resource(Diagnostics::new(&grid, scene.numerics.end_time / 100.0));
         world.insert_resource(SimTime {
             stop_at: Some(scene.numerics.end_time),
             ..Default::default()
@@ -47,27 +78,29 @@ impl Simulation {
                 scene.fluid.density,
                 n_bodies,
             ));
-            world.insert_resource(crate::systems::rigid_velocity::BodySums::new(&grid));
             world.insert_resource(crate::sim::build::contact_params(&scene, grid.h));
-            world.insert_resource(crate::systems::collision::Contacts::with_capacity(n_bodies));
         }
         world.insert_resource(grid);
-        let mut startup = startup_schedule();
+        let mode = Mode {
+            vacuum: scene.vacuum,
+            bodies: n_bodies,
+        };
+        let mut scheduler = Scheduler::default();
+        scheduler.build(&mut world, mode, plugins)?;
+        let mut startup = std::mem::take(&mut scheduler.startup);
         startup
             .initialize(&mut world)
             .map_err(|e| anyhow::anyhow!("the startup schedule cannot be built: {e:?}"))?;
         startup.run(&mut world);
-        let mut schedule = if scene.vacuum {
-            vacuum_schedule()
-        } else {
-            step_schedule_with(n_bodies > 0)
-        };
+        scheduler.collect_timings(&mut world.resource_mut::<Timings>());
+        let mut schedule = std::mem::take(&mut scheduler.step);
         schedule
             .initialize(&mut world)
             .map_err(|e| anyhow::anyhow!("the step schedule cannot be built: {e:?}"))?;
         let sim = Simulation {
             world,
             schedule,
+            scheduler,
             scene,
         };
         if let Some(f) = sim.failure() {
@@ -76,9 +109,22 @@ impl Simulation {
         Ok(sim)
     }
 
+    /// The checkpoint records of the plugins' state (see
+    /// [`crate::schedule::PluginContext::checkpoint_resource`]).
+    pub fn save_state(&self) -> Result<Vec<StateRecord>, String> {
+        self.scheduler.save_state(&self.world)
+    }
+
+    /// Restore the plugins' state from checkpoint records.
+    pub fn restore_state(&mut self, records: &[StateRecord]) -> Result<(), String> {
+        self.scheduler.restore_state(&mut self.world, records)
+    }
+
     /// Advance one step. On blow-up the error says what, where and when.
     pub fn step(&mut self) -> anyhow::Result<()> {
         self.schedule.run(&mut self.world);
+        let mut timings = self.world.resource_mut::<Timings>();
+        self.scheduler.collect_timings(&mut timings);
         match self.failure() {
             Some(f) => Err(anyhow::anyhow!(f)),
             None => Ok(()),

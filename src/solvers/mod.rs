@@ -1,4 +1,8 @@
-//! Solvers on the periodic grid: the FFT engine and the spectral operators built on it
-//! (Poisson, implicit diffusion, curl). Depends only on [`crate::base`].
+//! Solvers on the periodic grid: the FFT engine ([`fft`]: plans, scratch, transforms) and the
+//! spectral operators built on it ([`operators`]: Poisson, implicit diffusion, divergence
+//! cleaning). Depends only on [`crate::base`].
 
-pub mod spectral;
+pub mod fft;
+pub mod operators;
+
+pub use operators::Spectral;

@@ -12,7 +12,7 @@ use crate::base::grid::Grid;
 use crate::io::plot::{Series, Style, line_chart};
 use crate::scene::{RemeshKernel, Scene, ValidScene};
 use crate::sim::engine::Simulation;
-use crate::solvers::spectral::Spectral;
+use crate::solvers::Spectral;
 use crate::systems::transport::{LineScratch, sweep};
 use std::f64::consts::PI;
 use std::fmt;

@@ -1,0 +1,428 @@
+//! All scheduling in one place, and the plugin interface through which every physics system
+//! enters it.
+//!
+//! One step of the method is one run of the [`Step`] schedule: the named [`PhysicsSet`]s,
+//! chained once in the order of the paper's splitting (DESIGN.md, "One time step"). `First`
+//! and `Last` are empty: they are where users hook their own systems. The executor is
+//! single-threaded (the systems parallelise inside with rayon) and ambiguous ordering is an
+//! error: two systems that touch the same data must be ordered.
+//!
+//! A physics system is a [`Plugin`]: one file in `systems/` (or anywhere, see
+//! `examples/passive_scalar.rs`) whose [`Plugin::build`] inserts its resources, reading typed
+//! settings from [`Params`] and the world, adds its systems to a named set with
+//! [`PluginContext::add_system`], and registers the resources it keeps across a restart with
+//! [`PluginContext::checkpoint_resource`]. The built-in plugins are listed once, in
+//! `systems::builtin`; adding a system is that file plus one line there (or one
+//! `add_plugin` call on the simulation builder). Every system added through a plugin is timed
+//! under its name into [`Timings`]: no system carries timing code.
+//!
+//! Within one set, the systems are chained in the order they were added (plugin order, then
+//! order within a plugin). What a run does is decided by [`Mode`] (vacuum or fluid, with or
+//! without bodies), which each plugin reads in `build`.
+
+use crate::base::fields::{Params, Timings};
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
+use bevy_ecs::system::{Adapt, IntoAdapterSystem, RunSystemError, SystemIn};
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+/// The named stages of a step, in order. Sets without built-in systems yet are the places
+/// where the body physics plugs in.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PhysicsSet {
+    /// Empty: user systems that run before everything else.
+    First,
+    /// Sample body level sets on the grid (section 3.1).
+    LevelSets,
+    /// Characteristic functions and density (eq. 19).
+    Density,
+    /// Rigid velocity of each body from the flow (eq. 7).
+    RigidVelocity,
+    /// Contact forces between bodies (eqs. 20-22), added to the rigid velocities as impulses
+    /// (section 3.2).
+    Collision,
+    /// Implicit penalization (eqs. 13, 27).
+    Penalization,
+    /// Baroclinic vorticity generation (eq. 28).
+    Baroclinic,
+    /// Particle push, stretching and remeshing (eqs. 29-30).
+    Transport,
+    /// Implicit diffusion.
+    Diffusion,
+    /// Velocity from vorticity (eq. 15).
+    Poisson,
+    /// Move the bodies.
+    RigidUpdate,
+    /// Clock, time step, global quantities, blow-up guard.
+    Diagnostics,
+    /// Empty: user systems that run after everything else.
+    Last,
+}
+
+impl PhysicsSet {
+    /// Every set, in schedule order.
+    pub const ALL: [PhysicsSet; 13] = [
+        PhysicsSet::First,
+        PhysicsSet::LevelSets,
+        PhysicsSet::Density,
+        PhysicsSet::RigidVelocity,
+        PhysicsSet::Collision,
+        PhysicsSet::Penalization,
+        PhysicsSet::Baroclinic,
+        PhysicsSet::Transport,
+        PhysicsSet::Diffusion,
+        PhysicsSet::Poisson,
+        PhysicsSet::RigidUpdate,
+        PhysicsSet::Diagnostics,
+        PhysicsSet::Last,
+    ];
+}
+
+/// Label of the schedule that advances the simulation by one step.
+#[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Step;
+
+/// Label of the schedule run once before the first step (velocity and first dt).
+#[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Startup;
+
+/// The set of one named system (so later systems of the same set can be ordered after it).
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct Named(&'static str);
+
+fn configured(label: impl ScheduleLabel) -> Schedule {
+    let mut s = Schedule::new(label);
+    s.set_executor(SingleThreadedExecutor::new());
+    s.set_build_settings(ScheduleBuildSettings {
+        ambiguity_detection: LogLevel::Error,
+        ..Default::default()
+    });
+    s
+}
+
+/// An empty step schedule: the sets chained once, in the order of [`PhysicsSet::ALL`],
+/// single-threaded, ambiguity an error.
+pub fn step_schedule() -> Schedule {
+    let mut s = configured(Step);
+    for pair in PhysicsSet::ALL.windows(2) {
+        s.configure_sets(pair[0].before(pair[1]));
+    }
+    s
+}
+
+/// An empty startup schedule (its systems run in the order they are added).
+pub fn startup_schedule() -> Schedule {
+    configured(Startup)
+}
+
+/// What kind of run the world holds; plugins decide from it which systems to add.
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Mode {
+    /// No fluid: the bodies move under gravity and contact alone.
+    pub vacuum: bool,
+    /// Number of bodies.
+    pub bodies: usize,
+}
+
+impl Mode {
+    /// Whether the flow solver runs.
+    pub fn fluid(&self) -> bool {
+        !self.vacuum
+    }
+    /// Whether there are bodies.
+    pub fn has_bodies(&self) -> bool {
+        self.bodies > 0
+    }
+}
+
+/// A physics system: its resources, its systems and their place in the schedule, and the
+/// state it keeps across a checkpoint.
+pub trait Plugin: Send + Sync + 'static {
+    /// A short name (used in errors).
+    fn name(&self) -> &'static str;
+    /// Insert the resources and add the systems (see [`PluginContext`]). Only what the
+    /// [`Mode`] needs should be added: a pure-fluid run does no body work at all.
+    fn build(&self, ctx: &mut PluginContext) -> anyhow::Result<()>;
+}
+
+/// Wall-clock times of the systems run since the last [`Scheduler::collect_timings`].
+type TimingSink = Arc<Mutex<Vec<(&'static str, f64)>>>;
+
+/// Runs the wrapped system and records its wall-clock time under `name`.
+#[derive(Clone)]
+struct Timed {
+    name: &'static str,
+    sink: TimingSink,
+}
+
+impl<S: System<In = (), Out = ()>> Adapt<S> for Timed {
+    type In = ();
+    type Out = ();
+
+    fn adapt(
+        &mut self,
+        input: (),
+        run_system: impl FnOnce(SystemIn<'_, S>) -> Result<(), RunSystemError>,
+    ) -> Result<(), RunSystemError> {
+        let start = Instant::now();
+        let r = run_system(input);
+        let secs = start.elapsed().as_secs_f64();
+        self.sink
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((self.name, secs));
+        r
+    }
+}
+
+/// The state a plugin keeps across a checkpoint: one serde-encoded record per resource.
+struct StateEntry {
+    name: &'static str,
+    version: u32,
+    save: fn(&World) -> Result<Vec<u8>, String>,
+    restore: fn(&mut World, &[u8]) -> Result<(), String>,
+}
+
+/// One saved record: name, version and the encoded bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateRecord {
+    /// The record's name (unique in a simulation).
+    pub name: String,
+    /// Its layout version.
+    pub version: u32,
+    /// Its serde (postcard) encoding.
+    pub bytes: Vec<u8>,
+}
+
+/// The schedules being built and everything registered with them.
+pub struct Scheduler {
+    /// The step schedule.
+    pub step: Schedule,
+    /// The startup schedule.
+    pub startup: Schedule,
+    sink: TimingSink,
+    last_in_set: HashMap<PhysicsSet, &'static str>,
+    last_startup: Option<&'static str>,
+    names: Vec<&'static str>,
+    state: Vec<StateEntry>,
+}
+
+impl Default for Scheduler {
+    fn default() -> Self {
+        Scheduler {
+            step: step_schedule(),
+            startup: startup_schedule(),
+            sink: TimingSink::default(),
+            last_in_set: HashMap::new(),
+            last_startup: None,
+            names: Vec::new(),
+            state: Vec::new(),
+        }
+    }
+}
+
+impl Scheduler {
+    /// Build `plugins` in order into `world` for `mode`.
+    pub fn build(
+        &mut self,
+        world: &mut World,
+        mode: Mode,
+        plugins: &[Box<dyn Plugin>],
+    ) -> anyhow::Result<()> {
+        world.insert_resource(mode);
+        for p in plugins {
+            let mut ctx = PluginContext {
+                world: &mut *world,
+                scheduler: &mut *self,
+                plugin: p.name(),
+            };
+            p.build(&mut ctx)
+                .map_err(|e| anyhow::anyhow!("plugin `{}`: {e:#}", p.name()))?;
+        }
+        Ok(())
+    }
+
+    /// Replace `timings` with the times recorded since the last call (one schedule run: a
+    /// system not run in it is not listed, so a startup system is not counted at every step).
+    pub fn collect_timings(&self, timings: &mut Timings) {
+        let mut sink = self.sink.lock().unwrap_or_else(|e| e.into_inner());
+        timings.last.clear();
+        for &(name, secs) in sink.iter() {
+            match timings.last.iter_mut().find(|e| e.0 == name) {
+                Some(e) => e.1 += secs,
+                None => timings.last.push((name, secs)),
+            }
+        }
+        sink.clear();
+    }
+
+    /// The checkpoint records of every registered resource, in registration order.
+    pub fn save_state(&self, world: &World) -> Result<Vec<StateRecord>, String> {
+        self.state
+            .iter()
+            .map(|e| {
+                Ok(StateRecord {
+                    name: e.name.to_string(),
+                    version: e.version,
+                    bytes: (e.save)(world).map_err(|m| format!("state `{}`: {m}", e.name))?,
+                })
+            })
+            .collect()
+    }
+
+    /// Restore every registered resource from `records`; each must be there, once, with the
+    /// version it was registered with, and no record may be left over.
+    pub fn restore_state(&self, world: &mut World, records: &[StateRecord]) -> Result<(), String> {
+        for r in records {
+            if !self.state.iter().any(|e| e.name == r.name) {
+                return Err(format!(
+                    "it holds the state `{}`, which no system of this simulation keeps",
+                    r.name
+                ));
+            }
+        }
+        for e in &self.state {
+            let mut found = records.iter().filter(|r| r.name == e.name);
+            let Some(r) = found.next() else {
+                return Err(format!("it holds no state `{}`", e.name));
+            };
+            if found.next().is_some() {
+                return Err(format!("it holds the state `{}` twice", e.name));
+            }
+            if r.version != e.version {
+                return Err(format!(
+                    "its state `{}` is version {}, this tumble reads version {}",
+                    e.name, r.version, e.version
+                ));
+            }
+            (e.restore)(world, &r.bytes).map_err(|m| format!("state `{}`: {m}", e.name))?;
+        }
+        Ok(())
+    }
+}
+
+/// What a plugin's [`Plugin::build`] works with.
+pub struct PluginContext<'a> {
+    /// The world: read [`Params`], the grid and other typed resources, insert your own.
+    pub world: &'a mut World,
+    scheduler: &'a mut Scheduler,
+    plugin: &'static str,
+}
+
+impl PluginContext<'_> {
+    /// The kind of run.
+    pub fn mode(&self) -> Mode {
+        *self.world.resource::<Mode>()
+    }
+
+    /// The typed parameters.
+    pub fn params(&self) -> &Params {
+        self.world.resource::<Params>()
+    }
+
+    /// Insert a resource (replacing one of the same type).
+    pub fn insert_resource<R: Resource>(&mut self, r: R) {
+        self.world.insert_resource(r);
+    }
+
+    /// Insert a resource unless one of its type is there (for resources shared by plugins).
+    pub fn share_resource<R: Resource>(&mut self, make: impl FnOnce(&World) -> R) {
+        if !self.world.contains_resource::<R>() {
+            let r = make(self.world);
+            self.world.insert_resource(r);
+        }
+    }
+
+    fn check_name(&mut self, name: &'static str) -> anyhow::Result<()> {
+        if self.scheduler.names.contains(&name) {
+            anyhow::bail!("a system named `{name}` is already registered");
+        }
+        self.scheduler.names.push(name);
+        Ok(())
+    }
+
+    /// Add `system` to `set` of the step schedule, timed under `name`, after the systems
+    /// added to `set` before it.
+    pub fn add_system<M>(
+        &mut self,
+        set: PhysicsSet,
+        name: &'static str,
+        system: impl IntoSystem<(), (), M> + Send + Sync + 'static,
+    ) -> anyhow::Result<()> {
+        self.check_name(name)?;
+        let timed = IntoAdapterSystem::new(
+            Timed {
+                name,
+                sink: self.scheduler.sink.clone(),
+            },
+            system,
+        );
+        let prev = self.scheduler.last_in_set.insert(set, name);
+        let s = &mut self.scheduler.step;
+        match prev {
+            Some(p) => s.add_systems(timed.in_set(set).in_set(Named(name)).after(Named(p))),
+            None => s.add_systems(timed.in_set(set).in_set(Named(name))),
+        };
+        Ok(())
+    }
+
+    /// Add `system` to the startup schedule, timed under `name`, after the startup systems
+    /// added before it.
+    pub fn add_startup_system<M>(
+        &mut self,
+        name: &'static str,
+        system: impl IntoSystem<(), (), M> + Send + Sync + 'static,
+    ) -> anyhow::Result<()> {
+        let sname: &'static str = name;
+        let timed = IntoAdapterSystem::new(
+            Timed {
+                name,
+                sink: self.scheduler.sink.clone(),
+            },
+            system,
+        );
+        let prev = self.scheduler.last_startup.replace(sname);
+        let s = &mut self.scheduler.startup;
+        match prev {
+            Some(p) => s.add_systems(timed.in_set(Named(sname)).after(Named(p))),
+            None => s.add_systems(timed.in_set(Named(sname))),
+        };
+        Ok(())
+    }
+
+    /// Keep resource `R` across a checkpoint: it is saved as a record named `name` with
+    /// layout `version` (serde, postcard encoding) and restored from it. Change `version`
+    /// whenever `R`'s serialized layout changes: an old record is then refused by name.
+    pub fn checkpoint_resource<R>(&mut self, name: &'static str, version: u32) -> anyhow::Result<()>
+    where
+        R: Resource + Serialize + DeserializeOwned,
+    {
+        if self.scheduler.state.iter().any(|e| e.name == name) {
+            anyhow::bail!(
+                "plugin `{}`: the checkpoint state `{name}` is already registered",
+                self.plugin
+            );
+        }
+        self.scheduler.state.push(StateEntry {
+            name,
+            version,
+            save: |world| {
+                let r = world
+                    .get_resource::<R>()
+                    .ok_or_else(|| "the resource is missing".to_string())?;
+                postcard::to_stdvec(r).map_err(|e| e.to_string())
+            },
+            restore: |world, bytes| {
+                let r: R =
+                    postcard::from_bytes(bytes).map_err(|e| format!("corrupt data ({e})"))?;
+                world.insert_resource(r);
+                Ok(())
+            },
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,326 @@
+//! Spectral operators on the periodic grid, built on the FFT engine ([`crate::solvers::fft`]):
+//! velocity from vorticity (Poisson, Biot-Savart in Fourier space), implicit diffusion with the
+//! second-order difference Laplacian's symbol, the divergence cleaning of a 3D vorticity.
+//! Complex fields use the layout described in [`crate::solvers::fft`].
+
+use crate::base::grid::Grid;
+use crate::solvers::fft::{C64, FftEngine, wavenumber};
+use rayon::prelude::*;
+
+/// Wavenumber tables.
+struct Tables {
+    /// Spectral wavenumbers per axis (x: `0..=nx/2`; y, z: signed); z is `[0]` in 2D.
+    k: [Vec<f64>; 3],
+    /// The same with the Nyquist wavenumber set to 0 (for odd derivatives).
+    kd: [Vec<f64>; 3],
+    /// Symbol of minus the second-order difference along each axis: `(2 - 2 cos(k h)) / h^2`.
+    lap: [Vec<f64>; 3],
+}
+
+impl Tables {
+    fn new(grid: &Grid, nxh: usize) -> Self {
+        let h = grid.h;
+        let dim = if grid.n[2] == 1 { 2 } else { 3 };
+        let counts = [nxh, grid.n[1], if dim == 3 { grid.n[2] } else { 1 }];
+        let mk = |a: usize, zero_nyq: bool| -> Vec<f64> {
+            let n = grid.n[a];
+            let len = n as f64 * h;
+            (0..counts[a])
+                .map(|m| {
+                    if (a == 2 && dim == 2) || (zero_nyq && 2 * m == n) {
+                        0.0
+                    } else {
+                        wavenumber(m, n, len)
+                    }
+                })
+                .collect()
+        };
+        let k = [mk(0, false), mk(1, false), mk(2, false)];
+        let kd = [mk(0, true), mk(1, true), mk(2, true)];
+        let lap = std::array::from_fn(|a| {
+            k[a].iter()
+                .map(|&ka| (2.0 - 2.0 * (ka * h).cos()) / (h * h))
+                .collect()
+        });
+        Tables { k, kd, lap }
+    }
+}
+
+/// Periodic spectral Poisson / diffusion solver for one [`Grid`]; a resource.
+///
+/// Owns its plans, scratch pools and the cached vorticity spectrum (see [`Spectral::diffuse`] and
+/// [`Spectral::velocity`]). Complex fields use the layout described in the module docs.
+#[derive(bevy_ecs::prelude::Resource)]
+pub struct Spectral {
+    fft: FftEngine,
+    tab: Tables,
+    /// 2 or 3.
+    dim: usize,
+    /// Cached vorticity spectrum, one buffer per component.
+    omega_hat: Vec<Vec<C64>>,
+    /// Complex work buffer for non-destructive inverse transforms and velocity spectra.
+    work: Vec<C64>,
+    /// Version `omega_hat` corresponds to.
+    cached: Option<u64>,
+}
+
+impl Spectral {
+    /// Plans for this grid (2D when `grid.n[2] == 1`) and allocates everything needed later.
+    ///
+    /// Panics if a node count is 0 or `h` is not positive and finite.
+    pub fn new(grid: &Grid) -> Self {
+        let fft = FftEngine::new(grid);
+        let dim = if grid.n[2] == 1 { 2 } else { 3 };
+        let (_, nxh) = fft.dims();
+        let clen = fft.complex_len();
+        let ncomp = if dim == 2 { 1 } else { 3 };
+        Spectral {
+            tab: Tables::new(grid, nxh),
+            fft,
+            dim,
+            omega_hat: (0..ncomp).map(|_| vec![C64::default(); clen]).collect(),
+            work: vec![C64::default(); clen],
+            cached: None,
+        }
+    }
+
+    /// Number of complex coefficients of one real field: `(nx/2 + 1) * ny * nz`.
+    pub fn complex_len(&self) -> usize {
+        self.fft.complex_len()
+    }
+
+    /// Number of nodes of one real field: `nx * ny * nz`.
+    pub fn real_len(&self) -> usize {
+        self.fft.real_len()
+    }
+
+    /// The version the cached vorticity spectrum corresponds to, if any.
+    pub fn cached_version(&self) -> Option<u64> {
+        self.cached
+    }
+
+    /// The cached vorticity spectrum (one buffer per component; see [`Spectral::diffuse`]).
+    pub fn omega_hat(&self) -> &[Vec<C64>] {
+        &self.omega_hat
+    }
+
+    /// Forgets the cached vorticity spectrum (the next [`Spectral::velocity`] transforms afresh).
+    pub fn invalidate(&mut self) {
+        self.cached = None;
+    }
+
+    /// Forward real-to-complex 2D/3D transform of one real field (unnormalized) into `out`
+    /// (length [`Spectral::complex_len`]).
+    ///
+    /// Panics if a length is wrong.
+    pub fn forward(&mut self, input: &[f64], out: &mut [C64]) {
+        assert_eq!(input.len(), self.real_len(), "spectral: input length");
+        assert_eq!(out.len(), self.complex_len(), "spectral: output length");
+        self.fft.forward(input, out);
+    }
+
+    /// Inverse complex-to-real transform, normalized by `1/(nx ny nz)` so that
+    /// `inverse(forward(f)) == f` to round-off. `input` is used as scratch (destroyed). The
+    /// imaginary parts the real field cannot carry (x index 0 and, for even `nx`, `nx/2`, after
+    /// the y/z transforms) are dropped.
+    ///
+    /// Panics if a length is wrong.
+    pub fn inverse(&mut self, input: &mut [C64], out: &mut [f64]) {
+        assert_eq!(input.len(), self.complex_len(), "spectral: input length");
+        assert_eq!(out.len(), self.real_len(), "spectral: output length");
+        self.fft.inverse(None, input, out);
+    }
+
+    /// Checks the component count and lengths of a vector field.
+    fn check_field(&self, f: &[Vec<f64>], comps: usize, what: &str) {
+        assert_eq!(
+            f.len(),
+            comps,
+            "spectral: {what} must have {comps} components"
+        );
+        for c in f {
+            assert_eq!(
+                c.len(),
+                self.real_len(),
+                "spectral: {what} component length"
+            );
+        }
+    }
+
+    /// Forward-transforms every component of `omega` into the cache.
+    fn load_omega(&mut self, omega: &[Vec<f64>]) {
+        for (w, wh) in omega.iter().zip(self.omega_hat.iter_mut()) {
+            self.fft.forward(w, wh);
+        }
+    }
+
+    /// Inverse-transforms the cache back into `omega` (the cache is kept).
+    fn store_omega(&mut self, omega: &mut [Vec<f64>]) {
+        for (w, wh) in omega.iter_mut().zip(self.omega_hat.iter()) {
+            self.fft.inverse(Some(wh), &mut self.work, w);
+        }
+    }
+
+    /// Multiplies the cached spectrum by `1/(1 + nu_dt L(k))` (skipped when `nu_dt == 0`) and, in
+    /// 3D, removes its divergence.
+    fn filter_omega(&mut self, nu_dt: f64) {
+        let ([_, ny, _], nxh) = self.fft.dims();
+        let [lx, ly, lz] = &self.tab.lap;
+        let [kx, ky, kz] = &self.tab.kd;
+        let diffuse = nu_dt != 0.0;
+        match &mut self.omega_hat[..] {
+            [w] => {
+                if !diffuse {
+                    return;
+                }
+                w.par_chunks_mut(nxh).enumerate().for_each(|(r, row)| {
+                    let lyz = ly[r % ny] + lz[r / ny];
+                    for (v, &l) in row.iter_mut().zip(lx) {
+                        *v *= 1.0 / (1.0 + nu_dt * (l + lyz));
+                    }
+                });
+            }
+            [a, b, c] => {
+                a.par_chunks_mut(nxh)
+                    .zip(b.par_chunks_mut(nxh))
+                    .zip(c.par_chunks_mut(nxh))
+                    .enumerate()
+                    .for_each(|(r, ((ra, rb), rc))| {
+                        let (j, k) = (r % ny, r / ny);
+                        let lyz = ly[j] + lz[k];
+                        let (kyj, kzk) = (ky[j], kz[k]);
+                        for i in 0..nxh {
+                            let mut w = [ra[i], rb[i], rc[i]];
+                            if diffuse {
+                                let f = 1.0 / (1.0 + nu_dt * (lx[i] + lyz));
+                                w = w.map(|v| v * f);
+                            }
+                            let kv = [kx[i], kyj, kzk];
+                            let k2 = kv[0] * kv[0] + kv[1] * kv[1] + kv[2] * kv[2];
+                            if k2 > 0.0 {
+                                let d = (w[0] * kv[0] + w[1] * kv[1] + w[2] * kv[2]) / k2;
+                                for a in 0..3 {
+                                    w[a] -= d * kv[a];
+                                }
+                            }
+                            ra[i] = w[0];
+                            rb[i] = w[1];
+                            rc[i] = w[2];
+                        }
+                    });
+            }
+            _ => unreachable!("omega_hat has 1 or 3 components"),
+        }
+    }
+
+    /// Diffusion and (3D) divergence cleaning of the vorticity, in place.
+    ///
+    /// `omega` has 1 component (2D, scalar) or 3 (3D), each `grid.len()` long. Every component
+    /// is forward-transformed and multiplied by `1/(1 + nu_dt L(k))`, where
+    /// `L(k) = sum_a (2 - 2 cos(k_a h)) / h^2` over the active axes is the symbol of minus the
+    /// classical 5/7-point Laplacian (so this is implicit Euler,
+    /// `(I - nu dt Lap_h) omega_new = omega`). In 3D the divergence is then removed,
+    /// `w_hat -= k (k . w_hat) / |k|^2`, with spectral `k` whose Nyquist components are 0
+    /// (modes whose such `k` vanishes, among them `k = 0`, are untouched). The result is
+    /// transformed back into `omega` and its spectrum stays cached as version `version`.
+    ///
+    /// Panics if `omega` has the wrong shape.
+    pub fn diffuse(&mut self, omega: &mut [Vec<f64>], nu_dt: f64, version: u64) {
+        self.check_field(omega, self.omega_hat.len(), "omega");
+        self.load_omega(omega);
+        self.filter_omega(nu_dt);
+        self.store_omega(omega);
+        self.cached = Some(version);
+    }
+
+    /// Velocity from vorticity: `Lap psi = -omega`, `u = curl psi`, spectrally exact.
+    ///
+    /// If the cached vorticity spectrum was made for `version` it is used as is (no forward
+    /// transform, `omega` is not read). Otherwise `omega` is forward-transformed, in 3D
+    /// divergence-cleaned (as in [`Spectral::diffuse`], without diffusion) and the cleaned
+    /// vorticity written back into `omega` (in 2D `omega` is left untouched); the spectrum is then
+    /// cached for `version`.
+    ///
+    /// 2D: `u_hat = i ky w_hat / k^2`, `v_hat = -i kx w_hat / k^2`; 3D: `u_hat = i k x w_hat / |k|^2`,
+    /// with spectral `k = 2 pi m / L` per axis (`L = n h`), the Nyquist component set to 0 in the
+    /// numerator (first derivatives) but kept in `|k|^2`. The `k = 0` mode of `u` is
+    /// `background` (a uniform velocity). `u` has `grid.dim` components, each `grid.len()` long.
+    ///
+    /// Panics if `omega` or `u` has the wrong shape.
+    pub fn velocity(
+        &mut self,
+        omega: &mut [Vec<f64>],
+        version: u64,
+        background: [f64; 3],
+        u: &mut [Vec<f64>],
+    ) {
+        self.check_field(omega, self.omega_hat.len(), "omega");
+        self.check_field(u, self.dim, "u");
+        if self.cached != Some(version) {
+            self.load_omega(omega);
+            if self.dim == 3 {
+                self.filter_omega(0.0);
+                self.store_omega(omega);
+            }
+            self.cached = Some(version);
+        }
+        let n_total = self.real_len() as f64;
+        for (c, uc) in u.iter_mut().enumerate() {
+            self.velocity_hat(c);
+            self.work[0] = C64::new(background[c] * n_total, 0.0);
+            self.fft.inverse(None, &mut self.work, uc);
+        }
+    }
+
+    /// Writes the spectrum of velocity component `c` (without its mean) into `self.work`.
+    fn velocity_hat(&mut self, c: usize) {
+        let ([_, ny, _], nxh) = self.fft.dims();
+        let [kx, ky, kz] = &self.tab.k;
+        let [dx, dy, dz] = &self.tab.kd;
+        let wh = &self.omega_hat;
+        // i * z / k2
+        let i_over = |z: C64, k2: f64| {
+            if k2 > 0.0 {
+                C64::new(-z.im, z.re) / k2
+            } else {
+                C64::default()
+            }
+        };
+        self.work
+            .par_chunks_mut(nxh)
+            .enumerate()
+            .for_each(|(r, row)| {
+                let (j, k) = (r % ny, r / ny);
+                let k2yz = ky[j] * ky[j] + kz[k] * kz[k];
+                let off = r * nxh;
+                match wh.len() {
+                    1 => {
+                        let w = &wh[0][off..off + nxh];
+                        for i in 0..nxh {
+                            let k2 = kx[i] * kx[i] + k2yz;
+                            let num = if c == 0 { w[i] * dy[j] } else { -w[i] * dx[i] };
+                            row[i] = i_over(num, k2);
+                        }
+                    }
+                    _ => {
+                        let (a, b, d) = (
+                            &wh[0][off..off + nxh],
+                            &wh[1][off..off + nxh],
+                            &wh[2][off..off + nxh],
+                        );
+                        let (kyj, kzk) = (dy[j], dz[k]);
+                        for i in 0..nxh {
+                            let k2 = kx[i] * kx[i] + k2yz;
+                            let kxi = dx[i];
+                            let cross = match c {
+                                0 => d[i] * kyj - b[i] * kzk,
+                                1 => a[i] * kzk - d[i] * kxi,
+                                _ => b[i] * kxi - a[i] * kyj,
+                            };
+                            row[i] = i_over(cross, k2);
+                        }
+                    }
+                }
+            });
+    }
+}
