@@ -529,6 +529,9 @@ fn vacuum_free_fall_energy_is_analytic_and_conserved() {
     run_scene(scene, &opts).unwrap();
     let info = RunInfo::read(&d).unwrap();
     assert!(info.vacuum);
+    assert_eq!(info.name, "free-fall");
+    // The units note survives into the run directory's scene.ron.
+    assert_eq!(info.units.as_ref().unwrap().mass.as_deref(), Some("kg"));
     let e = body_energy(&d, &info).unwrap().expect("the ball's energy");
     let m = rho * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
     assert!(e.t.len() >= 30, "{} rows", e.t.len());
@@ -556,4 +559,13 @@ fn vacuum_free_fall_energy_is_analytic_and_conserved() {
     assert!(written.contains(&d.join("energy.png")), "{written:?}");
     assert!(!written.contains(&d.join("enstrophy.png")), "{written:?}");
     assert_png_900x600(&d.join("energy.png"));
+}
+
+#[test]
+fn a_blank_unit_name_is_a_scene_error_naming_the_field() {
+    let text = SCENE_2D.replace(r#"length: "cm""#, r#"length: " ""#);
+    let e = tumble::scene::Scene::parse(&text, "units.ron", "units").unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("output.units.length"), "{e}");
+    let text = SCENE_2D.replace(r#"length: "cm""#, r#"lenght: "cm""#);
+    assert!(tumble::scene::Scene::parse(&text, "units.ron", "units").is_err());
 }
