@@ -2,7 +2,11 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use tumble::io::plot::{Series, Style, line_chart, plot_run_dir};
+use tumble::io::plot::{
+    RunInfo, Series, Style, axis_label, body_energy, chart_title, gap_series, line_chart,
+    plot_run_dir, unit_text,
+};
+use tumble::scene::Units;
 
 /// A fresh, empty directory under the system temp dir, unique to this process and `name`.
 fn tmp(name: &str) -> PathBuf {
@@ -388,4 +392,180 @@ fn cli_plot_writes_and_prints_the_paths() {
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("no series.csv"), "{stderr}");
+}
+
+#[test]
+fn titles_name_the_scene_and_labels_carry_its_units() {
+    assert!(chart_title("Contact gap", "rebound-vacuum").contains("rebound-vacuum"));
+    assert!(chart_title("Contact gap", "rebound-vacuum").contains("Contact gap"));
+    let cgs = Units {
+        length: Some("cm".into()),
+        time: Some("s".into()),
+        mass: Some("g".into()),
+    };
+    let u = Some(&cgs);
+    assert_eq!(axis_label("t", u, 0, 1, 0), "t [s]");
+    assert_eq!(axis_label("height z", u, 1, 0, 0), "height z [cm]");
+    assert_eq!(axis_label("velocity vz", u, 1, -1, 0), "velocity vz [cm/s]");
+    assert_eq!(
+        axis_label("energy", u, 2, -2, 1),
+        "energy [g cm\u{b2}/s\u{b2}]"
+    );
+    assert_eq!(unit_text(u, 0, -2, 0), "[1/s\u{b2}]");
+    assert_eq!(unit_text(u, -3, 0, 1), "[g/cm\u{b3}]");
+    assert_eq!(axis_label("Re", u, 0, 0, 0), "Re");
+    // No units note, or one without the unit a label needs: "(scene units)".
+    assert_eq!(axis_label("t", None, 0, 1, 0), "t (scene units)");
+    let no_mass = Units {
+        mass: None,
+        ..cgs.clone()
+    };
+    assert_eq!(axis_label("t", Some(&no_mass), 0, 1, 0), "t [s]");
+    assert_eq!(
+        axis_label("energy", Some(&no_mass), 2, -2, 1),
+        "energy (scene units)"
+    );
+}
+
+/// A 2D scene.ron matching the bodies of [`run_dir`] (`floor`, `body0`, `body1`).
+const SCENE_2D: &str = r#"Scene(
+    name: "two-disks",
+    domain: (extent: [1.0, 1.0], h: 0.0625),
+    fluid: (gravity: [0.0, -1.0]),
+    vacuum: true,
+    contact: (eps: 0.02),
+    output: (fields: [], units: (length: "cm", time: "s")),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.0), kind: Static,
+         position: [0.5, 0.1]),
+        (name: "body0", shape: Disk(radius: 0.1), position: [0.3, 0.5]),
+        (name: "body1", shape: Disk(radius: 0.1), position: [0.7, 0.5]),
+    ],
+)"#;
+
+#[test]
+fn gap_plot_names_the_pairs_and_draws_eps() {
+    let d = run_dir("gap-names", 2);
+    std::fs::write(d.join("scene.ron"), SCENE_2D).unwrap();
+    // Entries given as body ids are named from the scene (0 = floor, 2 = body1).
+    std::fs::write(
+        d.join("contacts.csv"),
+        "t,body_a,body_b,gap,normal_force\n\
+         0,body0,floor,0.1,0\n0,1,2,0.05,0\n\
+         0.1,body0,0,0.05,1\n0.1,body1,body0,0.02,0\n\
+         0.3,body0,floor,0,2\n",
+    )
+    .unwrap();
+    let series = gap_series(&d).unwrap();
+    let labels: Vec<&str> = series.iter().map(|s| s.label.as_str()).collect();
+    assert_eq!(
+        labels[..2],
+        ["body0\u{2013}floor", "body0\u{2013}body1"],
+        "{labels:?}"
+    );
+    assert_eq!(series[0].points, [(0.0, 0.1), (0.1, 0.05), (0.3, 0.0)]);
+    assert_eq!(series[1].points, [(0.0, 0.05), (0.1, 0.02)]);
+    let eps = series.last().unwrap();
+    assert_eq!(series.len(), 3);
+    assert!(
+        eps.label.contains("ε") && eps.label.contains("0.02"),
+        "{}",
+        eps.label
+    );
+    assert_eq!(eps.style, Style::Dashed);
+    // A horizontal line at ε = contact.eps over the contacts' time span.
+    assert_eq!(eps.points, [(0.0, 0.02), (0.3, 0.02)]);
+
+    // Without contact.eps, ε is the grid spacing h.
+    let scene = SCENE_2D.replace("contact: (eps: 0.02),", "");
+    std::fs::write(d.join("scene.ron"), scene).unwrap();
+    let series = gap_series(&d).unwrap();
+    assert_eq!(series.last().unwrap().points[0].1, 0.0625);
+
+    let info = RunInfo::read(&d).unwrap();
+    assert_eq!(info.name, "two-disks");
+    assert_eq!(info.units.as_ref().unwrap().length.as_deref(), Some("cm"));
+    assert!(
+        plot_run_dir(&d)
+            .unwrap()
+            .contains(&d.join("contacts_gap.png"))
+    );
+
+    // No scene.ron (an older run directory): the pairs as written (ids stay ids), no ε line.
+    std::fs::remove_file(d.join("scene.ron")).unwrap();
+    let series = gap_series(&d).unwrap();
+    assert_eq!(series.len(), 4);
+    assert!(series.iter().all(|s| !s.label.contains("ε")));
+    assert_eq!(series[1].label, "1\u{2013}2");
+}
+
+#[test]
+fn vacuum_free_fall_energy_is_analytic_and_conserved() {
+    use tumble::run::{RunOptions, run_scene};
+    // A sphere falling freely in vacuum (no other body, so no contact): V(t) = g t, so the
+    // kinetic energy is ½ m (g t)² and, with the potential energy -m g·x, the total is
+    // constant.
+    let (r, rho, g, dt, end): (f64, f64, f64, f64, f64) = (0.15, 2.0, 1.0, 0.01, 0.3);
+    let text = format!(
+        r#"Scene(
+        name: "free-fall",
+        domain: (extent: [1.0, 1.0, 1.0], h: 0.0625),
+        fluid: (gravity: [0.0, 0.0, -{g}]),
+        vacuum: true,
+        numerics: (dt: Fixed({dt}), end_time: {end}),
+        output: (fields: [], units: (length: "m", time: "s", mass: "kg")),
+        bodies: [(name: "ball", shape: Sphere(radius: {r}), density: {rho},
+                  position: [0.5, 0.5, 0.7])],
+    )"#
+    );
+    let scene = tumble::scene::Scene::parse(&text, "free-fall.ron", "free-fall").unwrap();
+    let d = tmp("free-fall");
+    let opts = RunOptions {
+        out: Some(d.clone()),
+        force: true,
+        quiet: true,
+        ..Default::default()
+    };
+    run_scene(scene, &opts).unwrap();
+    let info = RunInfo::read(&d).unwrap();
+    assert!(info.vacuum);
+    assert_eq!(info.name, "free-fall");
+    // The units note survives into the run directory's scene.ron.
+    assert_eq!(info.units.as_ref().unwrap().mass.as_deref(), Some("kg"));
+    let e = body_energy(&d, &info).unwrap().expect("the ball's energy");
+    let m = rho * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+    assert!(e.t.len() >= 30, "{} rows", e.t.len());
+    assert!((e.t.last().unwrap() - end).abs() < 1e-9);
+    let total = e.total();
+    for ((&t, &k), &tot) in e.t.iter().zip(&e.kinetic).zip(&total) {
+        // Gravity alone: the velocity update V += g Δt is exact, so is the kinetic energy.
+        let exact = 0.5 * m * (g * t).powi(2);
+        assert!(
+            (k - exact).abs() <= 1e-9 * m + 1e-9 * exact,
+            "t = {t}: kinetic {k}, ½ m (g t)² = {exact}"
+        );
+        // The time integration (symplectic Euler) moves the body with the new velocity:
+        // x_n = x_0 + g Δt² n(n+1)/2, so E_n - E_0 = -½ m g² Δt t_n exactly; allow that drift
+        // (3 % of the kinetic energy at t = 0.3), plus rounding.
+        let drift = 0.5 * m * g * g * dt * t;
+        assert!(
+            (tot - total[0]).abs() <= drift * (1.0 + 1e-6) + 1e-12,
+            "t = {t}: total energy {tot}, at t = 0 {}: drift beyond ½ m g² Δt t = {drift}",
+            total[0]
+        );
+    }
+    // The energy plot of a vacuum run is the bodies' energy; no flat enstrophy plot.
+    let written = plot_run_dir(&d).unwrap();
+    assert!(written.contains(&d.join("energy.png")), "{written:?}");
+    assert!(!written.contains(&d.join("enstrophy.png")), "{written:?}");
+    assert_png_900x600(&d.join("energy.png"));
+}
+
+#[test]
+fn a_blank_unit_name_is_a_scene_error_naming_the_field() {
+    let text = SCENE_2D.replace(r#"length: "cm""#, r#"length: " ""#);
+    let e = tumble::scene::Scene::parse(&text, "units.ron", "units").unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("output.units.length"), "{e}");
+    let text = SCENE_2D.replace(r#"length: "cm""#, r#"lenght: "cm""#);
+    assert!(tumble::scene::Scene::parse(&text, "units.ron", "units").is_err());
 }

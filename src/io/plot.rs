@@ -8,12 +8,15 @@
 //! - [`line_chart`] draws any number of [`Series`] (lines, or markers for reference values)
 //!   on one pair of axes and writes the PNG atomically.
 //! - [`plot_run_dir`] reads `series.csv`, `bodies.csv` and `contacts.csv` of a run directory
-//!   and writes the standard plots next to them.
+//!   and writes the standard plots next to them, titled with the scene's name and labelled
+//!   with its units from `scene.ron` ([`RunInfo`], [`chart_title`], [`axis_label`]).
 //!
 //! Nothing here panics on bad input: malformed CSV rows, missing columns and unplottable data
 //! are `anyhow` errors naming the file (and line).
 
+use crate::scene::{Scene, Units};
 use anyhow::{Context, Result, anyhow, bail, ensure};
+use glam::{DMat3, DQuat, DVec3};
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 use std::collections::HashMap;
@@ -361,30 +364,218 @@ fn render(
     Ok(())
 }
 
+/// What the plots take from a run directory's `scene.ron` (the scene as run).
+#[derive(Clone, Debug, Default)]
+pub struct RunInfo {
+    /// The scene's name (the run folder's name when there is no readable `scene.ron`).
+    pub name: String,
+    /// The scene's `output.units` note, if any.
+    pub units: Option<Units>,
+    /// The contact range ε, length: `contact.eps`, else the grid spacing h.
+    pub eps: Option<f64>,
+    /// Whether the run was in vacuum (no flow).
+    pub vacuum: bool,
+    /// Gravity g, length/time².
+    pub gravity: [f64; 3],
+    /// The scene's bodies, in order.
+    pub bodies: Vec<BodyInfo>,
+}
+
+/// A body of the scene as the plots need it.
+#[derive(Clone, Debug)]
+pub struct BodyInfo {
+    /// Its name (as in `bodies.csv` and `contacts.csv`).
+    pub name: String,
+    /// Mass ρ |S| (|S| the area of a 2D shape), mass units; `None` for an unbounded shape or
+    /// one that could not be built.
+    pub mass: Option<f64>,
+    /// Inertia tensor ρ ∫(|x|² Id - x xᵀ) about the body origin, in the body frame.
+    pub inertia: Option<DMat3>,
+}
+
+impl RunInfo {
+    /// Reads `dir/scene.ron` (parsed and checked by the scene loader, relative mesh paths
+    /// against `dir`); `None` if there is none or it does not load (a run directory written by
+    /// an older tumble), and the plots then use the folder's name and no units.
+    pub fn read(dir: &Path) -> Option<RunInfo> {
+        let file = dir.join("scene.ron");
+        let text = std::fs::read_to_string(&file).ok()?;
+        let scene = match Scene::parse_in(&text, &file.display().to_string(), "", dir) {
+            Ok(s) => s,
+            Err(e) => {
+                tracing::warn!("plots without the scene's name and units: {e}");
+                return None;
+            }
+        };
+        let h = scene.grid().h;
+        let fluid_density = scene.fluid.density;
+        let bodies = scene
+            .bodies
+            .iter()
+            .zip(scene.geometries())
+            .map(|(b, g)| {
+                let rho = b.density.unwrap_or(fluid_density);
+                BodyInfo {
+                    name: b.name.clone(),
+                    mass: g.volume().map(|v| rho * v),
+                    inertia: g.inertia_unit_density().map(|j| rho * j),
+                }
+            })
+            .collect();
+        Some(RunInfo {
+            name: scene.name.clone(),
+            units: scene.output.units.clone(),
+            eps: Some(scene.contact.eps.unwrap_or(h)),
+            vacuum: scene.vacuum,
+            gravity: scene.gravity(),
+            bodies,
+        })
+    }
+
+    /// The info of a run directory: [`RunInfo::read`], else the folder's name alone.
+    fn of_dir(dir: &Path) -> RunInfo {
+        RunInfo::read(dir).unwrap_or_else(|| RunInfo {
+            name: dir
+                .canonicalize()
+                .ok()
+                .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
+                .unwrap_or_else(|| dir.display().to_string()),
+            ..RunInfo::default()
+        })
+    }
+
+    /// The index of the body named `name`, or numbered `name` (a body id) when no body has
+    /// that name.
+    fn body(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name).or_else(|| {
+            name.parse::<usize>()
+                .ok()
+                .filter(|&i| i < self.bodies.len())
+        })
+    }
+
+    /// The body name for a `contacts.csv` entry: the name itself, or the name of body id
+    /// `entry`.
+    fn body_name<'s>(&'s self, entry: &'s str) -> &'s str {
+        self.body(entry)
+            .map_or(entry, |i| self.bodies[i].name.as_str())
+    }
+}
+
+/// A chart's title: what it shows, then the scene's name.
+pub fn chart_title(what: &str, scene: &str) -> String {
+    format!("{what} \u{2014} {scene}")
+}
+
+/// The unit of a quantity of dimension length^`length` time^`time` mass^`mass` in the scene's
+/// `units`: `"[cm/s]"`, `"[g cm²/s²]"`; `""` for a pure number; `"(scene units)"` when a
+/// unit it needs has no name.
+pub fn unit_text(units: Option<&Units>, length: i32, time: i32, mass: i32) -> String {
+    let dims = [
+        (mass, units.and_then(|u| u.mass.as_deref())),
+        (length, units.and_then(|u| u.length.as_deref())),
+        (time, units.and_then(|u| u.time.as_deref())),
+    ];
+    if dims.iter().all(|(p, _)| *p == 0) {
+        return String::new();
+    }
+    let power = |name: &str, p: i32| match p {
+        1 => name.to_string(),
+        2 => format!("{name}\u{b2}"),
+        3 => format!("{name}\u{b3}"),
+        p => format!("{name}^{p}"),
+    };
+    let (mut num, mut den) = (Vec::new(), Vec::new());
+    for (p, name) in dims {
+        if p == 0 {
+            continue;
+        }
+        let Some(name) = name else {
+            return "(scene units)".to_string();
+        };
+        if p > 0 {
+            num.push(power(name, p));
+        } else {
+            den.push(power(name, -p));
+        }
+    }
+    let num = if num.is_empty() {
+        "1".to_string()
+    } else {
+        num.join(" ")
+    };
+    if den.is_empty() {
+        format!("[{num}]")
+    } else if den.len() == 1 {
+        format!("[{num}/{}]", den[0])
+    } else {
+        format!("[{num}/({})]", den.join(" "))
+    }
+}
+
+/// An axis label: the quantity, then its unit as [`unit_text`] writes it ("t [s]",
+/// "height z (scene units)").
+pub fn axis_label(
+    quantity: &str,
+    units: Option<&Units>,
+    length: i32,
+    time: i32,
+    mass: i32,
+) -> String {
+    let u = unit_text(units, length, time, mass);
+    if u.is_empty() {
+        quantity.to_string()
+    } else {
+        format!("{quantity} {u}")
+    }
+}
+
+/// A series that owns its label, as the run-directory plots build them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OwnedSeries {
+    /// Legend text.
+    pub label: String,
+    /// `(x, y)` points.
+    pub points: Vec<(f64, f64)>,
+    /// How it is drawn.
+    pub style: Style,
+}
+
+fn borrowed(series: &[OwnedSeries]) -> Vec<Series<'_>> {
+    series
+        .iter()
+        .map(|s| Series {
+            label: &s.label,
+            points: s.points.clone(),
+            style: s.style,
+        })
+        .collect()
+}
+
 /// Reads the CSV files of the run directory `dir` and writes PNG plots next to them; returns
 /// the paths written, in this order:
 ///
-/// - `series.csv` (required) → `energy.png`, `enstrophy.png` (against `t`).
+/// - `series.csv` (required) → `energy.png`, `enstrophy.png` (against `t`). In a vacuum run
+///   (no flow) `energy.png` instead shows the bodies' kinetic, potential and total energy
+///   ([`body_energy`]) and there is no `enstrophy.png`.
 /// - `bodies.csv` (if present and not empty) → `bodies_height.png` and
 ///   `bodies_velocity.png`: the vertical coordinate and velocity of each body against `t`, one
 ///   curve per body name. The vertical axis is z if the run is 3D (any non-zero `z`, `vz`,
 ///   `wx` or `wy` in the file), else y. Only the first [`MAX_CURVES`] names get a curve; the
 ///   title then says how many were plotted.
-/// - `contacts.csv` (if present and not empty) → `contacts_gap.png`: the gap of each contact
-///   pair `body_a`–`body_b` against `t` (at most [`MAX_CURVES`] pairs).
+/// - `contacts.csv` (if present and not empty) → `contacts_gap.png`: [`gap_series`].
 ///
-/// Columns are found by header name. A missing `series.csv`, a missing column, a row with the
-/// wrong number of fields or an unparsable number is an error naming the file (and line).
+/// Titles name the scene (`scene.ron`'s name, else the folder's) and axis labels carry the
+/// scene's `output.units` ([`axis_label`]). Columns are found by header name. A missing
+/// `series.csv`, a missing column, a row with the wrong number of fields or an unparsable
+/// number is an error naming the file (and line).
 pub fn plot_run_dir(dir: &Path) -> Result<Vec<PathBuf>> {
     let series_csv = dir.join("series.csv");
     if !series_csv.is_file() {
         bail!("not a run directory: {} has no series.csv", dir.display());
     }
-    let run = dir
-        .canonicalize()
-        .ok()
-        .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .unwrap_or_else(|| dir.display().to_string());
+    let info = RunInfo::of_dir(dir);
+    let units = info.units.as_ref();
     let mut written = Vec::new();
 
     let text = read(&series_csv)?;
@@ -395,35 +586,252 @@ pub fn plot_run_dir(dir: &Path) -> Result<Vec<PathBuf>> {
         series_csv.display()
     );
     let t = table.column("t")?;
-    for (column, file, title) in [
-        ("energy", "energy.png", "Kinetic energy"),
-        ("enstrophy", "enstrophy.png", "Enstrophy"),
-    ] {
-        let values = table.column(column)?;
-        let path = dir.join(file);
+    let t_label = axis_label("t", units, 0, 1, 0);
+    let bodies_energy = if info.vacuum {
+        body_energy(dir, &info)?
+    } else {
+        None
+    };
+    if let Some(e) = &bodies_energy {
+        let path = dir.join("energy.png");
+        let curve = |label: &str, v: &[f64], style| OwnedSeries {
+            label: label.to_string(),
+            points: e.t.iter().copied().zip(v.iter().copied()).collect(),
+            style,
+        };
+        let series = [
+            curve("kinetic ½mV² + ½Ω·JΩ", &e.kinetic, Style::Line),
+            curve("potential −m g·x", &e.potential, Style::Line),
+            curve(
+                "total (contact energy not counted)",
+                &e.total(),
+                Style::Dashed,
+            ),
+        ];
         line_chart(
             &path,
-            &format!("{title} ({run})"),
-            "t",
-            column,
-            &[Series {
-                label: column,
-                points: t.iter().copied().zip(values).collect(),
-                style: Style::Line,
-            }],
+            &chart_title("Energy of the bodies (vacuum)", &info.name),
+            &t_label,
+            &axis_label("energy", units, 2, -2, 1),
+            &borrowed(&series),
         )?;
         written.push(path);
+    } else {
+        for (column, file, what, length, time) in [
+            ("energy", "energy.png", "Kinetic energy ½⟨|u|²⟩", 2, -2),
+            ("enstrophy", "enstrophy.png", "Enstrophy ½⟨|ω|²⟩", 0, -2),
+        ] {
+            let values = table.column(column)?;
+            let path = dir.join(file);
+            line_chart(
+                &path,
+                &chart_title(what, &info.name),
+                &t_label,
+                &axis_label(column, units, length, time, 0),
+                &[Series {
+                    label: column,
+                    points: t.iter().copied().zip(values).collect(),
+                    style: Style::Line,
+                }],
+            )?;
+            written.push(path);
+        }
     }
 
     let bodies_csv = dir.join("bodies.csv");
     if bodies_csv.is_file() {
-        written.extend(plot_bodies(dir, &bodies_csv, &run)?);
+        written.extend(plot_bodies(dir, &bodies_csv, &info)?);
     }
     let contacts_csv = dir.join("contacts.csv");
     if contacts_csv.is_file() {
-        written.extend(plot_contacts(dir, &contacts_csv, &run)?);
+        let (series, note) = gap_series_of(&contacts_csv, &info)?;
+        if !series.is_empty() {
+            let path = dir.join("contacts_gap.png");
+            line_chart(
+                &path,
+                &format!("{}{note}", chart_title("Contact gap", &info.name)),
+                &t_label,
+                &axis_label("gap", units, 1, 0, 0),
+                &borrowed(&series),
+            )?;
+            written.push(path);
+        }
     }
     Ok(written)
+}
+
+/// The bodies' energy over time (sums over the moving bodies of `bodies.csv`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BodyEnergy {
+    /// Times, time units.
+    pub t: Vec<f64>,
+    /// Kinetic energy Σ ½ m |V|² + ½ Ω·(R J Rᵀ) Ω at each time, mass length²/time².
+    pub kinetic: Vec<f64>,
+    /// Potential energy Σ -m g·x (zero at the origin) at each time.
+    pub potential: Vec<f64>,
+}
+
+impl BodyEnergy {
+    /// Kinetic plus potential energy at each time.
+    pub fn total(&self) -> Vec<f64> {
+        self.kinetic
+            .iter()
+            .zip(&self.potential)
+            .map(|(k, p)| k + p)
+            .collect()
+    }
+}
+
+/// The kinetic (translational ½ m |V|² plus rotational ½ Ω·(R J Rᵀ) Ω, R the orientation in
+/// `bodies.csv`) and potential (-m g·x) energy of the moving bodies of the run in `dir`, summed
+/// per time, with m and J of the scene's shapes and densities (`info`, see
+/// [`RunInfo::read`]). V, Ω and x are the body origin's velocity, angular velocity and
+/// position, so this is exact for shapes centred on their origin (every primitive).
+/// `None` if there is no `bodies.csv` (or no row), or a body's mass or inertia is not known (an
+/// unbounded shape, or no readable `scene.ron`).
+pub fn body_energy(dir: &Path, info: &RunInfo) -> Result<Option<BodyEnergy>> {
+    let csv = dir.join("bodies.csv");
+    if !csv.is_file() {
+        return Ok(None);
+    }
+    let text = read(&csv)?;
+    let table = Table::parse(&csv, &text)?;
+    if table.rows.is_empty() {
+        return Ok(None);
+    }
+    let c = |name: &str| table.col(name);
+    let ti = c("t")?;
+    let ni = c("name")?;
+    let cols =
+        |names: [&str; 3]| -> Result<[usize; 3]> { Ok([c(names[0])?, c(names[1])?, c(names[2])?]) };
+    let (xi, vi, wi) = (
+        cols(["x", "y", "z"])?,
+        cols(["vx", "vy", "vz"])?,
+        cols(["wx", "wy", "wz"])?,
+    );
+    let qi = [c("qw")?, c("qx")?, c("qy")?, c("qz")?];
+    let g = DVec3::from_array(info.gravity);
+    let mut e = BodyEnergy::default();
+    for row in &table.rows {
+        let name = row.fields[ni].trim();
+        let Some(body) = info.body(name).map(|i| &info.bodies[i]) else {
+            return Ok(None);
+        };
+        let (Some(m), Some(j)) = (body.mass, body.inertia) else {
+            return Ok(None);
+        };
+        let vec3 = |i: [usize; 3]| -> Result<DVec3> {
+            Ok(DVec3::new(
+                table.num(row, i[0])?,
+                table.num(row, i[1])?,
+                table.num(row, i[2])?,
+            ))
+        };
+        let (x, v, w) = (vec3(xi)?, vec3(vi)?, vec3(wi)?);
+        let q = DQuat::from_xyzw(
+            table.num(row, qi[1])?,
+            table.num(row, qi[2])?,
+            table.num(row, qi[3])?,
+            table.num(row, qi[0])?,
+        );
+        let r = if q.length_squared() > 0.0 {
+            DMat3::from_quat(q.normalize())
+        } else {
+            DMat3::IDENTITY
+        };
+        let kinetic = 0.5 * m * v.length_squared() + 0.5 * w.dot(r * j * r.transpose() * w);
+        let potential = -m * g.dot(x);
+        let t = table.num(row, ti)?;
+        if e.t.last() != Some(&t) {
+            e.t.push(t);
+            e.kinetic.push(0.0);
+            e.potential.push(0.0);
+        }
+        *e.kinetic.last_mut().unwrap_or(&mut 0.0) += kinetic;
+        *e.potential.last_mut().unwrap_or(&mut 0.0) += potential;
+    }
+    Ok(Some(e))
+}
+
+/// The series of `contacts_gap.png` for the run in `dir`: the gap of each contact pair against
+/// `t`, labelled with the two bodies' names (`contacts.csv` entries that are body ids are
+/// named from the scene), at most [`MAX_CURVES`] pairs; then, when the scene gives it, the
+/// contact range ε as a dashed horizontal line over the same times, labelled "ε = …". Empty
+/// if `contacts.csv` is missing or has no row.
+pub fn gap_series(dir: &Path) -> Result<Vec<OwnedSeries>> {
+    let csv = dir.join("contacts.csv");
+    if !csv.is_file() {
+        return Ok(Vec::new());
+    }
+    Ok(gap_series_of(&csv, &RunInfo::of_dir(dir))?.0)
+}
+
+/// [`gap_series`] of `csv`, and the title note when pairs were left out.
+fn gap_series_of(csv: &Path, info: &RunInfo) -> Result<(Vec<OwnedSeries>, String)> {
+    let text = read(csv)?;
+    let table = Table::parse(csv, &text)?;
+    if table.rows.is_empty() {
+        return Ok((Vec::new(), String::new()));
+    }
+    let (ti, ai, bi, gi) = (
+        table.col("t")?,
+        table.col("body_a")?,
+        table.col("body_b")?,
+        table.col("gap")?,
+    );
+    // A pair is the same whichever body is listed first: key on the sorted names.
+    let names: Vec<(&str, &str)> = table
+        .rows
+        .iter()
+        .map(|row| {
+            (
+                info.body_name(row.fields[ai].trim()),
+                info.body_name(row.fields[bi].trim()),
+            )
+        })
+        .collect();
+    let keys: Vec<String> = names
+        .iter()
+        .map(|&(a, b)| {
+            if a <= b {
+                format!("{a}\n{b}")
+            } else {
+                format!("{b}\n{a}")
+            }
+        })
+        .collect();
+    let mut curves = Curves::new();
+    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for ((row, key), &(a, b)) in table.rows.iter().zip(&keys).zip(&names) {
+        let t = table.num(row, ti)?;
+        let gap = table.num(row, gi)?;
+        if t.is_finite() {
+            t0 = t0.min(t);
+            t1 = t1.max(t);
+        }
+        if let Some(curve) = curves.get(key, || format!("{a}\u{2013}{b}")) {
+            curve.points[0].push((t, gap));
+        }
+    }
+    let mut series: Vec<OwnedSeries> = curves
+        .curves
+        .iter()
+        .map(|c| OwnedSeries {
+            label: c.label.clone(),
+            points: c.points[0].clone(),
+            style: Style::Line,
+        })
+        .collect();
+    if let Some(eps) = info.eps
+        && t0 <= t1
+    {
+        series.push(OwnedSeries {
+            label: format!("ε = {eps:.4} (contact range)"),
+            points: vec![(t0, eps), (t1, eps)],
+            style: Style::Dashed,
+        });
+    }
+    Ok((series, curves.note("pairs")))
 }
 
 /// The points of one body (or contact pair), for up to two charts.
@@ -471,7 +879,7 @@ impl<'a> Curves<'a> {
     }
 }
 
-fn plot_bodies(dir: &Path, csv: &Path, run: &str) -> Result<Vec<PathBuf>> {
+fn plot_bodies(dir: &Path, csv: &Path, info: &RunInfo) -> Result<Vec<PathBuf>> {
     let text = read(csv)?;
     let table = Table::parse(csv, &text)?;
     if table.rows.is_empty() {
@@ -504,13 +912,19 @@ fn plot_bodies(dir: &Path, csv: &Path, run: &str) -> Result<Vec<PathBuf>> {
         }
     }
     let note = curves.note("bodies");
+    let units = info.units.as_ref();
     let mut written = Vec::new();
     for (file, what, y_label, pick) in [
-        ("bodies_height.png", "Body height", axis.to_string(), 0),
+        (
+            "bodies_height.png",
+            "Body height",
+            axis_label(&format!("height {axis}"), units, 1, 0, 0),
+            0,
+        ),
         (
             "bodies_velocity.png",
             "Vertical velocity",
-            format!("v{axis}"),
+            axis_label(&format!("velocity v{axis}"), units, 1, -1, 0),
             1,
         ),
     ] {
@@ -526,69 +940,14 @@ fn plot_bodies(dir: &Path, csv: &Path, run: &str) -> Result<Vec<PathBuf>> {
         let path = dir.join(file);
         line_chart(
             &path,
-            &format!("{what} ({run}){note}"),
-            "t",
+            &format!("{}{note}", chart_title(what, &info.name)),
+            &axis_label("t", units, 0, 1, 0),
             &y_label,
             &series,
         )?;
         written.push(path);
     }
     Ok(written)
-}
-
-fn plot_contacts(dir: &Path, csv: &Path, run: &str) -> Result<Vec<PathBuf>> {
-    let text = read(csv)?;
-    let table = Table::parse(csv, &text)?;
-    if table.rows.is_empty() {
-        return Ok(Vec::new());
-    }
-    let (ti, ai, bi, gi) = (
-        table.col("t")?,
-        table.col("body_a")?,
-        table.col("body_b")?,
-        table.col("gap")?,
-    );
-    // A pair is the same whichever body is listed first: key on the sorted names.
-    let keys: Vec<String> = table
-        .rows
-        .iter()
-        .map(|row| {
-            let (a, b) = (row.fields[ai].trim(), row.fields[bi].trim());
-            if a <= b {
-                format!("{a}\n{b}")
-            } else {
-                format!("{b}\n{a}")
-            }
-        })
-        .collect();
-    let mut curves = Curves::new();
-    for (row, key) in table.rows.iter().zip(&keys) {
-        let t = table.num(row, ti)?;
-        let gap = table.num(row, gi)?;
-        let label = || format!("{}\u{2013}{}", row.fields[ai].trim(), row.fields[bi].trim());
-        if let Some(curve) = curves.get(key, label) {
-            curve.points[0].push((t, gap));
-        }
-    }
-    let series: Vec<Series<'_>> = curves
-        .curves
-        .iter()
-        .map(|c| Series {
-            label: &c.label,
-            points: c.points[0].clone(),
-            style: Style::Line,
-        })
-        .collect();
-    let path = dir.join("contacts_gap.png");
-    let note = curves.note("pairs");
-    line_chart(
-        &path,
-        &format!("Contact gap ({run}){note}"),
-        "t",
-        "gap",
-        &series,
-    )?;
-    Ok(vec![path])
 }
 
 fn read(path: &Path) -> Result<String> {

@@ -574,6 +574,21 @@ impl Output {
         {
             return fail(&["checkpoint_every"], format!("must be positive, got {e}"));
         }
+        if let Some(u) = &self.units {
+            for (key, name) in [("length", &u.length), ("time", &u.time), ("mass", &u.mass)] {
+                if let Some(n) = name
+                    && (n.trim().is_empty() || n.chars().any(char::is_control))
+                {
+                    return fail(
+                        &["units", key],
+                        format!(
+                            "a unit name is a short text such as \"cm\" or \"s\", got {n:?} \
+                             (leave it out if the scene has no named unit)"
+                        ),
+                    );
+                }
+            }
+        }
         Ok(())
     }
 }

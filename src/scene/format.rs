@@ -350,6 +350,24 @@ pub struct Output {
     /// --checkpoint-every` overrides it. `None` writes a checkpoint only when the run is
     /// interrupted (Ctrl-C, SIGTERM). Default: None.
     pub checkpoint_every: Option<f64>,
+    /// Names of the scene's units, a note for the plots' axis labels only (no number depends
+    /// on it): `units: (length: "cm", time: "s", mass: "g")` labels the axes "t [s]",
+    /// "height [cm]", "velocity [cm/s]". Default: none (the labels say "(scene units)").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub units: Option<Units>,
+}
+
+/// The names of a scene's units (`output.units`), for labels: each a short non-empty text such
+/// as "cm", "s" or "g". An axis whose unit needs a name that is not given says "(scene units)".
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Units {
+    /// Name of the length unit (e.g. "m", "cm"). Default: none.
+    pub length: Option<String>,
+    /// Name of the time unit (e.g. "s"). Default: none.
+    pub time: Option<String>,
+    /// Name of the mass unit (e.g. "kg", "g"). Default: none.
+    pub mass: Option<String>,
 }
 
 /// A file format for field snapshots.
@@ -377,6 +395,7 @@ impl Default for Output {
             dir: None,
             formats: vec![OutputFormat::Vtk],
             checkpoint_every: None,
+            units: None,
         }
     }
 }
