@@ -519,10 +519,9 @@ fn vacuum_free_fall_energy_is_analytic_and_conserved() {
     )"#
     );
     let scene = tumble::scene::Scene::parse(&text, "free-fall.ron", "free-fall").unwrap();
-    let d = tmp("free-fall");
+    let d = tmp("free-fall").join("run");
     let opts = RunOptions {
         out: Some(d.clone()),
-        force: true,
         quiet: true,
         ..Default::default()
     };
