@@ -93,6 +93,18 @@ pub fn markdown(reports: &[Report], quick: bool, date: &str, machine: &str, wall
                 );
             }
         }
+        let known: Vec<_> = r
+            .rows
+            .iter()
+            .filter(|row| !row.pass())
+            .filter_map(|row| r.known_failure(row))
+            .collect();
+        if !known.is_empty() {
+            let _ = writeln!(s);
+            for k in known {
+                let _ = writeln!(s, "- Known failure, *{}*: {}", cell(k.row), k.why);
+            }
+        }
         if let Some(e) = &r.error {
             let _ = writeln!(s, "\n**The run failed:** {}", cell(e));
         }

@@ -60,6 +60,8 @@ pub struct Case {
     pub full_time: RunTime,
     /// Run time class of the quick version.
     pub quick_time: RunTime,
+    /// Rows known to fail (shown as failing, tracked by an issue).
+    pub known_failures: &'static [KnownFailure],
     /// Runs the case (`true`: the quick version).
     run: fn(bool) -> anyhow::Result<Report>,
 }
@@ -76,8 +78,30 @@ impl Case {
         });
         rep.quick = quick;
         rep.seconds = start.elapsed().as_secs_f64();
+        rep.known = self
+            .known_failures
+            .iter()
+            .filter(|k| if quick { k.quick } else { k.full })
+            .copied()
+            .collect();
         rep
     }
+}
+
+/// A row of a case that is known to fail, with the reason and the issue that owns it. The
+/// row still runs and is still shown as FAIL (by `tumble validate`, in `docs/validation.md`
+/// and in the quick tier's output); the quick-tier test fails if any other row fails, and
+/// also if a known failure starts passing, so the list cannot go stale.
+#[derive(Debug, Clone, Copy)]
+pub struct KnownFailure {
+    /// The start of the row's quantity text.
+    pub row: &'static str,
+    /// Whether it fails in the quick version.
+    pub quick: bool,
+    /// Whether it fails in the full version.
+    pub full: bool,
+    /// Why, with the measured numbers and the issue that will decide it.
+    pub why: &'static str,
 }
 
 /// Every case, in the order `tumble validate` runs them.
@@ -91,6 +115,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Seconds,
         quick_time: RunTime::Seconds,
         run: |quick| Ok(poisson(quick)),
+        known_failures: &[],
     },
     Case {
         name: "remesh",
@@ -101,6 +126,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Seconds,
         quick_time: RunTime::Seconds,
         run: |_| Ok(remesh()),
+        known_failures: &[],
     },
     Case {
         name: "lamb-oseen",
@@ -111,6 +137,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Seconds,
         quick_time: RunTime::Seconds,
         run: lamb_oseen,
+        known_failures: &[],
     },
     Case {
         name: "taylor-green-2d",
@@ -121,6 +148,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Seconds,
         quick_time: RunTime::Seconds,
         run: taylor_green_2d,
+        known_failures: &[],
     },
     Case {
         name: "taylor-green-3d",
@@ -131,6 +159,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Minutes,
         quick_time: RunTime::Seconds,
         run: taylor_green_3d,
+        known_failures: &[],
     },
     Case {
         name: "sedimentation-2d",
@@ -141,6 +170,26 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Long,
         quick_time: RunTime::Seconds,
         run: sedimentation_2d,
+        known_failures: &[
+            KnownFailure {
+                row: "max fall velocity, finer grid against coarser",
+                quick: true,
+                full: false,
+                why: "the quick grids (h = 1/64 and 1/96, 8 and 12 cells per radius) are far from the range of the paper's 2% (h = 1/256 against 1/384, where the full case measures 1.9%): 5.5% here; issue 16 re-derives this case under its new coupling",
+            },
+            KnownFailure {
+                row: "h = 1/64: rebound height with kappa",
+                quick: true,
+                full: false,
+                why: "the rebound height changes 17.6% when kappa doubles (10% asked); known since issue 4 (blocked, 20% in the full case); issue 16 replaces this row by the height curve within 2h",
+            },
+            KnownFailure {
+                row: "h = 1/256: rebound height with kappa",
+                quick: false,
+                full: true,
+                why: "the rebound height changes 20% when kappa doubles (10% asked); issue 4 was blocked on it; issue 16 replaces this row by the height curve within 2h",
+            },
+        ],
     },
     Case {
         name: "sphere-settling",
@@ -151,6 +200,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Long,
         quick_time: RunTime::Minutes,
         run: sphere_settling,
+        known_failures: &[],
     },
     Case {
         name: "stokes-settling",
@@ -161,6 +211,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Minutes,
         quick_time: RunTime::Minutes,
         run: stokes_settling,
+        known_failures: &[],
     },
     Case {
         name: "rebound-vacuum",
@@ -171,6 +222,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Seconds,
         quick_time: RunTime::Seconds,
         run: contact::rebound_vacuum,
+        known_failures: &[],
     },
     Case {
         name: "ellipsoid-sphere",
@@ -181,6 +233,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Seconds,
         quick_time: RunTime::Seconds,
         run: contact::ellipsoid_sphere,
+        known_failures: &[],
     },
     Case {
         name: "dkt",
@@ -191,6 +244,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Minutes,
         quick_time: RunTime::Minutes,
         run: contact::dkt,
+        known_failures: &[],
     },
     Case {
         name: "tank-vacuum",
@@ -201,6 +255,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Minutes,
         quick_time: RunTime::Seconds,
         run: contact::tank_vacuum,
+        known_failures: &[],
     },
     Case {
         name: "tank-pile",
@@ -211,6 +266,7 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Long,
         quick_time: RunTime::Minutes,
         run: contact::tank_pile,
+        known_failures: &[],
     },
 ];
 
@@ -558,6 +614,8 @@ pub struct Report {
     pub error: Option<String>,
     /// Wall time of the run in seconds.
     pub seconds: f64,
+    /// The rows of this version known to fail (from the case's registry entry).
+    pub known: Vec<KnownFailure>,
 }
 
 impl Report {
@@ -570,11 +628,48 @@ impl Report {
             quick: false,
             error: None,
             seconds: 0.0,
+            known: Vec::new(),
         }
     }
     /// Whether the run finished and every row passes.
     pub fn passed(&self) -> bool {
         self.error.is_none() && !self.rows.is_empty() && self.rows.iter().all(Row::pass)
+    }
+    /// The known failure a row matches, if any.
+    pub fn known_failure(&self, row: &Row) -> Option<&KnownFailure> {
+        self.known.iter().find(|k| row.quantity.starts_with(k.row))
+    }
+    /// Failures that are not known (rows, or the run's error): what the quick tier rejects.
+    pub fn unexpected_failures(&self) -> Vec<String> {
+        let mut out: Vec<String> = self
+            .rows
+            .iter()
+            .filter(|r| !r.pass() && self.known_failure(r).is_none())
+            .map(|r| r.quantity.clone())
+            .collect();
+        if let Some(e) = &self.error {
+            out.push(format!("error: {e}"));
+        }
+        if self.rows.is_empty() && self.error.is_none() {
+            out.push("no row was checked".into());
+        }
+        out
+    }
+    /// Known failures that passed (or whose row is gone): the registry must be updated.
+    pub fn stale_known_failures(&self) -> Vec<String> {
+        if self.error.is_some() {
+            return Vec::new();
+        }
+        self.known
+            .iter()
+            .filter(|k| {
+                !self
+                    .rows
+                    .iter()
+                    .any(|r| r.quantity.starts_with(k.row) && !r.pass())
+            })
+            .map(|k| k.row.to_string())
+            .collect()
     }
     /// The file a plot is written to in `dir`: `<case>[-quick]-<stem>.png`.
     pub fn plot_path(&self, dir: &Path, plot: &PlotSpec) -> PathBuf {
@@ -630,6 +725,11 @@ impl fmt::Display for Report {
                 t,
                 if r.pass() { "ok" } else { "FAIL" }
             )?;
+        }
+        for r in &self.rows {
+            if let Some(k) = self.known_failure(r).filter(|_| !r.pass()) {
+                writeln!(f, "  known failure: {}: {}", k.row, k.why)?;
+            }
         }
         for n in &self.notes {
             writeln!(f, "  {n}")?;
