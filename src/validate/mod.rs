@@ -200,7 +200,12 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Long,
         quick_time: RunTime::Minutes,
         run: sphere_settling,
-        known_failures: &[],
+        known_failures: &[KnownFailure {
+            row: "d = 0.2, ν = 0.1: U(t = 1.2) at h = 1/64 vs paper",
+            quick: false,
+            full: true,
+            why: "0.2403 against the paper's 0.256 (-6.1%, 4% asked); the no-slip enforced once per step makes the drag depend on nu dt / h^2; issue 3 was blocked on this row, issue 16 (penalization inside the implicit diffusion) addresses the cause",
+        }],
     },
     Case {
         name: "stokes-settling",
