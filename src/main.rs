@@ -164,7 +164,7 @@ fn main() -> ExitCode {
                         .map(|(n, t)| format!("{n} {:.4}", t / steps))
                         .collect();
                     println!("  seconds per step: {}", per.join(", "));
-                    let index = ["fields.pvd", "fields.xmf"]
+                    let index = ["fields.pvd", "fields.xmf", "bodies.pvd"]
                         .map(|f| s.dir.join(f))
                         .into_iter()
                         .find(|p| p.exists())

@@ -3,7 +3,8 @@
 //! ρ = ρ_F (1 - Σ_i χ_i) + Σ_i ρ_i χ_i, with χ_i = H(φ_i) from the level-set system. Static
 //! bodies (walls) count with the fluid's density, so that gravity makes no vorticity at walls.
 //! Also keeps Σχ_i and the union level set max_i φ_i for output, and at each node the body
-//! whose level set is the largest there (its owner, for the baroclinic term).
+//! whose level set is the largest there (its owner, for the baroclinic term). Computed also
+//! at startup, so that the state at t = 0 holds the bodies.
 
 use crate::base::fields::Params;
 use crate::base::grid::Grid;
@@ -76,6 +77,9 @@ impl crate::schedule::Plugin for DensityPlugin {
         let mode = ctx.mode();
         if mode.fluid() && mode.has_bodies() {
             ctx.add_system(PhysicsSet::Density, "density", density)?;
+            // The same before the first step (after `level_sets_init`), for the t = 0 state;
+            // the first step computes it again from the same patches.
+            ctx.add_startup_system("density_init", density)?;
         }
         Ok(())
     }

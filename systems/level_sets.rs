@@ -61,6 +61,22 @@ pub fn level_sets(
     }
 }
 
+/// Sample every body's level set before the first step, so that the state at t = 0 (its
+/// snapshot) holds the bodies. Nothing is checked here (the first step's [`level_sets`]
+/// checks, and reports, where the bodies are) and static bodies are left to be sampled again
+/// by it, as they were before this system existed: the step's results are unchanged.
+pub fn level_sets_init(
+    grid: Res<Grid>,
+    params: Res<Params>,
+    mut bodies: Query<(&RigidState, &BodyShape, &mut GridPatch)>,
+) {
+    let eps = params.interface_cells * grid.h;
+    for (state, shape, mut patch) in &mut bodies {
+        sample(&grid, state, shape, &mut patch, eps);
+        patch.sampled = false;
+    }
+}
+
 /// How far beyond a body (length) its patch reaches: χ = H_ε(φ) is non-zero for φ > -ε, and the
 /// centred differences of ρ in the baroclinic term read one node further, where the node's
 /// owner must be known; one more cell is margin. The reference level set keeps a wider band
@@ -239,6 +255,7 @@ impl crate::schedule::Plugin for LevelSetsPlugin {
         use crate::schedule::PhysicsSet;
         if ctx.mode().has_bodies() {
             ctx.add_system(PhysicsSet::LevelSets, "level_sets", level_sets)?;
+            ctx.add_startup_system("level_sets_init", level_sets_init)?;
         }
         Ok(())
     }

@@ -114,7 +114,8 @@ fn parse_xmf(path: &Path) -> Vec<Snap> {
 }
 
 /// The field `name` of `sim` in the dataset's layout: C order (z, y, x[, component]), vectors
-/// with 3 components (z = 0 in 2D), φ clamped at -1e30.
+/// with 3 components (z = 0 in 2D), φ clamped below at minus the band kept around each body
+/// (6 h).
 fn expected(sim: &Simulation, name: &str) -> Vec<f64> {
     let f = sim.fields();
     let comps: Vec<&Vec<f64>> = match name {
@@ -125,7 +126,10 @@ fn expected(sim: &Simulation, name: &str) -> Vec<f64> {
             let v = match name {
                 "density" => b.rho.clone(),
                 "chi" => b.chi.clone(),
-                "phi" => b.phi.iter().map(|p| p.max(-1e30)).collect(),
+                "phi" => {
+                    let band = 6.0 * sim.grid().h;
+                    b.phi.iter().map(|p| p.max(-band)).collect()
+                }
                 n => panic!("unexpected field {n}"),
             };
             return v;

@@ -452,3 +452,91 @@ fn body_names_with_commas_and_quotes_round_trip_through_the_csvs() {
         assert_eq!((&row[1], &row[2]), (floor, disk));
     }
 }
+
+/// The t = 0 snapshot holds the bodies as they start: χ = Σ H_ε(φ_i) integrates (sum times
+/// cell volume) to the bodies' volume, and φ is finite everywhere (never a sentinel).
+///
+/// Tolerance, relative: (h / r_min)², O(h²) as the errors are. With the cosine-smoothed
+/// Heaviside of half-width ε = h, H(s) - step(s) is odd in s, so the smoothing shifts the
+/// volume by exactly -2π ∫ s (H - step) ds = 0.41 ε² per disk and 8π r (0.065 ε²) per
+/// sphere: 0.13 (ε/r)² and 0.49 (ε/r)² relative. The trilinear interpolation of the
+/// reference distance and the lattice sum of χ (its transition spans about two cells) add
+/// O(h²) of either sign. A body missing from the snapshot (at least 30% of the volume here)
+/// or an unsmoothed, shifted χ fails.
+#[test]
+fn the_first_snapshot_holds_the_bodies_and_a_finite_phi() {
+    use std::f64::consts::PI;
+    use tumble::run::{RunOptions, run_scene};
+    let dir = Scratch::new("t0-bodies");
+    let cases = [
+        (
+            r#"Scene(
+    name: "t0-disks",
+    domain: (extent: [1.0, 1.0], cells: [64, 64]),
+    fluid: (gravity: [0.0, -1.0]),
+    numerics: (dt: Fixed(0.001), end_time: 0.001),
+    bodies: [
+        (name: "a", shape: Disk(radius: 0.1), density: 2.0, position: [0.3, 0.4]),
+        (name: "b", shape: Disk(radius: 0.15), density: 0.5, position: [0.65, 0.6],
+         rotation: [0.4]),
+    ],
+    output: (fields: [Density]),
+)"#,
+            vec![0.1, 0.15],
+            2,
+        ),
+        (
+            r#"Scene(
+    name: "t0-spheres",
+    domain: (extent: [1.0, 1.0, 1.0], cells: [32, 32, 32]),
+    fluid: (gravity: [0.0, 0.0, -1.0]),
+    numerics: (dt: Fixed(0.001), end_time: 0.001),
+    bodies: [
+        (name: "a", shape: Sphere(radius: 0.15), density: 2.0, position: [0.3, 0.4, 0.5]),
+        (name: "b", shape: Sphere(radius: 0.2), density: 3.0, position: [0.7, 0.6, 0.5]),
+    ],
+    output: (fields: [Density]),
+)"#,
+            vec![0.15, 0.2],
+            3,
+        ),
+    ];
+    for (text, radii, dim) in cases {
+        let scene = tumble::scene::Scene::parse(text, "t0.ron", "").unwrap();
+        let out = dir.path().join(scene.name.clone());
+        let h: f64 = 1.0 / if dim == 2 { 64.0 } else { 32.0 };
+        let opts = RunOptions {
+            out: Some(out.clone()),
+            quiet: true,
+            ..Default::default()
+        };
+        run_scene(scene, &opts).unwrap();
+        let snap = read_vti(&out.join("fields_000000.vti")).unwrap();
+        assert_eq!(snap.time, Some(0.0));
+        let field = |name: &str| {
+            &snap
+                .arrays
+                .iter()
+                .find(|a| a.0 == name)
+                .unwrap_or_else(|| panic!("no {name}"))
+                .2
+        };
+        let cell = h.powi(dim);
+        let chi: f64 = field("chi").iter().sum::<f64>() * cell;
+        let exact: f64 = if dim == 2 {
+            radii.iter().map(|r| PI * r * r).sum()
+        } else {
+            radii.iter().map(|r| 4.0 / 3.0 * PI * r * r * r).sum()
+        };
+        let r_min = radii.iter().cloned().fold(f64::INFINITY, f64::min);
+        assert!(
+            (chi / exact - 1.0).abs() < (h / r_min).powi(2),
+            "{dim}D: chi integrates to {chi}, the bodies' volume is {exact}"
+        );
+        let phi = field("phi");
+        assert!(phi.iter().all(|p| p.is_finite() && *p >= -6.0 * h - 1e-12));
+        assert!(phi.iter().any(|p| *p > 0.0));
+        // Far from both bodies (a corner), φ is the band's edge, -6 h.
+        assert_eq!(phi[0], -6.0 * h);
+    }
+}

@@ -256,6 +256,11 @@ pub struct FreeMotion {
     pub angular_momentum: Option<DVec3>,
 }
 
+/// A body's surface in its own frame, for viewing (see [`crate::bodies::surface`]): the
+/// output places it at the body's pose (world = centre + orientation · p).
+#[derive(Component, Debug, Clone, Default)]
+pub struct BodySurface(pub crate::bodies::surface::SurfaceMesh);
+
 /// Grid fields made by the bodies.
 #[derive(Resource, Debug, Clone)]
 pub struct BodyFields {
@@ -263,7 +268,8 @@ pub struct BodyFields {
     pub rho: Vec<f64>,
     /// Σ χ_i.
     pub chi: Vec<f64>,
-    /// Union level set max_i φ_i (φ > 0 inside some body); -∞ far from every body.
+    /// Union level set max_i φ_i (φ > 0 inside some body); -∞ where no body's patch reaches
+    /// (the output clamps it at [`band`]'s edge, see `io::snapshots`).
     pub phi: Vec<f64>,
     /// Velocity change made by the penalization this step (scratch, `dim` components).
     pub du: Vec<Vec<f64>>,

@@ -3,12 +3,19 @@
 //! indexed by `fields.xmf`, plus `series.h5`, the time series of the run, the bodies and the
 //! contacts, appended to at every snapshot, at every checkpoint and at the end).
 //!
+//! With bodies, every snapshot also writes the bodies' surfaces in their current pose
+//! (`bodies_NNNNNN.vtp` indexed by `bodies.pvd`, see [`crate::io::surfaces`]), vacuum runs
+//! included; a run whose scene asks for no field (`fields: []`) writes no `.vti` (they would
+//! be empty) and no `fields.pvd`.
+//!
 //! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
 //! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
 //! (the snapshots written after the checkpoint removed, the indexes and `series.h5` rewritten).
 
+use crate::bodies::{Body, BodySurface, Hydro, RigidState};
 use crate::io::checkpoint::RunProgress;
 use crate::io::output::{PvdSeries, VtkField, write_vti};
+use crate::io::surfaces::{SurfacePart, SurfaceSeries};
 use crate::scene::{FieldName, OutputFormat};
 use crate::sim::engine::Simulation;
 use anyhow::Context;
@@ -18,22 +25,49 @@ use std::path::{Path, PathBuf};
 pub struct Snapshots {
     dir: PathBuf,
     pvd: Option<PvdSeries>,
+    /// The bodies' surfaces (a run with bodies).
+    surfaces: Option<SurfaceSeries>,
     #[cfg(feature = "hdf5")]
     hdf5: Option<Hdf5Outputs>,
     count: usize,
 }
 
+/// The vectors each body's surface cells carry.
+const SURFACE_VECTORS: [&str; 3] = ["velocity", "angular_velocity", "force"];
+
+/// Whether `sim`'s snapshots hold VTK field files: the scene asks for VTK and for at least one
+/// field that exists in this run.
+fn vtk_fields(sim: &Simulation) -> bool {
+    sim.scene().output.has_format(OutputFormat::Vtk) && with_fields(sim, |f| !f.is_empty())
+}
+
+/// The body-surface series of `sim`'s run in `dir`, if it has bodies.
+fn surface_series(dir: &Path, sim: &Simulation) -> Option<SurfaceSeries> {
+    (!sim.scene().bodies.is_empty()).then(|| SurfaceSeries::new(dir, "bodies", &SURFACE_VECTORS))
+}
+
+/// The time a body-surface snapshot `file` holds (its `TimeValue` field data).
+fn vtp_time(file: &Path) -> Result<f64, String> {
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {} ({e})", file.display()))?;
+    text.split_once("Name=\"TimeValue\"")
+        .and_then(|(_, rest)| rest.split_once('>'))
+        .and_then(|(_, rest)| rest.split_once('<'))
+        .and_then(|(v, _)| v.trim().parse::<f64>().ok())
+        .ok_or_else(|| format!("{} holds no TimeValue", file.display()))
+}
+
 impl Snapshots {
     /// The writers for `sim`'s scene, writing into `dir` (nothing is written yet).
     pub fn new(dir: &Path, sim: &Simulation) -> Self {
-        let out = &sim.scene().output;
         Snapshots {
             dir: dir.to_path_buf(),
-            pvd: out
-                .has_format(OutputFormat::Vtk)
-                .then(|| PvdSeries::new(dir.join("fields.pvd"))),
+            pvd: vtk_fields(sim).then(|| PvdSeries::new(dir.join("fields.pvd"))),
+            surfaces: surface_series(dir, sim),
             #[cfg(feature = "hdf5")]
-            hdf5: out
+            hdf5: sim
+                .scene()
+                .output
                 .has_format(OutputFormat::Hdf5)
                 .then(|| Hdf5Outputs::new(dir, sim)),
             count: 0,
@@ -48,9 +82,8 @@ impl Snapshots {
     /// is written (see [`cut_back`](Snapshots::cut_back)); an error says why the run directory
     /// does not match the checkpoint.
     pub fn resume(dir: &Path, sim: &Simulation, progress: &RunProgress) -> Result<Self, String> {
-        let out = &sim.scene().output;
         let count = progress.snapshots as usize;
-        let pvd = if out.has_format(OutputFormat::Vtk) {
+        let pvd = if vtk_fields(sim) {
             if progress.pvd.len() != count {
                 return Err(format!(
                     "it lists {} VTK snapshots in fields.pvd and counts {count} snapshots",
@@ -64,8 +97,30 @@ impl Snapshots {
         } else {
             None
         };
+        // The body surfaces kept: each snapshot's time read back from its file.
+        let surfaces = match surface_series(dir, sim) {
+            Some(series) => {
+                let mut entries = Vec::with_capacity(count);
+                for k in 0..count {
+                    let file = format!("bodies_{k:06}.vtp");
+                    let time = vtp_time(&dir.join(&file)).map_err(|e| {
+                        format!("{e}: the run directory does not match the checkpoint")
+                    })?;
+                    if time > sim.time() {
+                        return Err(format!(
+                            "{} is a snapshot at t = {time}, after the checkpoint: the run \
+                             directory does not match the checkpoint",
+                            dir.join(&file).display()
+                        ));
+                    }
+                    entries.push((time, file));
+                }
+                Some(series.with_entries(entries))
+            }
+            None => None,
+        };
         #[cfg(feature = "hdf5")]
-        let hdf5 = if out.has_format(OutputFormat::Hdf5) {
+        let hdf5 = if sim.scene().output.has_format(OutputFormat::Hdf5) {
             Some(Hdf5Outputs::resume(dir, sim, count)?)
         } else {
             None
@@ -73,6 +128,7 @@ impl Snapshots {
         Ok(Snapshots {
             dir: dir.to_path_buf(),
             pvd,
+            surfaces,
             #[cfg(feature = "hdf5")]
             hdf5,
             count,
@@ -81,13 +137,13 @@ impl Snapshots {
 
     /// Make the run directory match a resumed [`Snapshots`]: remove the snapshot files
     /// numbered from [`count`](Snapshots::count) on (written after the checkpoint), rewrite
-    /// `fields.pvd` and `fields.xmf` with the snapshots kept, and cut `series.h5` back to the
-    /// steps up to the checkpoint.
+    /// `fields.pvd`, `bodies.pvd` and `fields.xmf` with the snapshots kept, and cut
+    /// `series.h5` back to the steps up to the checkpoint.
     pub fn cut_back(&mut self) -> anyhow::Result<()> {
         for k in self.count.. {
             let mut found = false;
-            for ext in ["vti", "h5"] {
-                let f = self.dir.join(format!("fields_{k:06}.{ext}"));
+            for name in ["fields_{k}.vti", "fields_{k}.h5", "bodies_{k}.vtp"] {
+                let f = self.dir.join(name.replace("{k}", &format!("{k:06}")));
                 if f.exists() {
                     std::fs::remove_file(&f)
                         .with_context(|| format!("cannot remove {}", f.display()))?;
@@ -100,6 +156,9 @@ impl Snapshots {
         }
         if let Some(p) = &self.pvd {
             p.write().context("cannot write fields.pvd")?;
+        }
+        if let Some(s) = &self.surfaces {
+            s.pvd().write().context("cannot write bodies.pvd")?;
         }
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.hdf5.as_mut() {
@@ -119,12 +178,27 @@ impl Snapshots {
         self.pvd.as_ref().map_or(&[], |p| p.entries())
     }
 
-    /// The index file a viewer opens: `fields.pvd`, else `fields.xmf`.
+    /// `(time, file)` of the body-surface snapshots listed in `bodies.pvd` (none without
+    /// bodies).
+    pub fn surface_entries(&self) -> &[(f64, String)] {
+        self.surfaces.as_ref().map_or(&[], |s| s.pvd().entries())
+    }
+
+    /// The index file a viewer opens: `fields.pvd`, else with HDF5 output `fields.xmf`, else
+    /// (a run writing no field) `bodies.pvd`.
     pub fn index_file(&self) -> PathBuf {
-        match &self.pvd {
-            Some(p) => p.path().to_path_buf(),
-            None => self.dir.join("fields.xmf"),
+        match (&self.pvd, &self.surfaces) {
+            (Some(p), _) => p.path().to_path_buf(),
+            (None, Some(s)) if !self.has_hdf5() => s.pvd().path().to_path_buf(),
+            _ => self.dir.join("fields.xmf"),
         }
+    }
+
+    fn has_hdf5(&self) -> bool {
+        #[cfg(feature = "hdf5")]
+        return self.hdf5.is_some();
+        #[cfg(not(feature = "hdf5"))]
+        false
     }
 
     /// Record the state after a step for `series.h5` (a no-op without HDF5 output).
@@ -153,6 +227,10 @@ impl Snapshots {
                 .context("cannot write fields.pvd")?;
             written.push(file);
         }
+        if let Some(series) = self.surfaces.as_mut() {
+            let file = write_surfaces(series, self.count, sim)?;
+            written.push(file);
+        }
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.hdf5.as_mut() {
             written.extend(h.snapshot(&self.dir, self.count, sim, vtk)?);
@@ -172,16 +250,46 @@ impl Snapshots {
     }
 }
 
+/// Snapshot `index` of the bodies' surfaces, each at its pose with its velocity, angular
+/// velocity and hydrodynamic force, in body-id order; returns the file name.
+fn write_surfaces(
+    series: &mut SurfaceSeries,
+    index: usize,
+    sim: &Simulation,
+) -> anyhow::Result<String> {
+    let world = &sim.world;
+    let mut bodies: Vec<_> = world
+        .try_query::<(&Body, &RigidState, &Hydro, &BodySurface)>()
+        .map(|mut q| q.iter(world).collect())
+        .unwrap_or_default();
+    bodies.sort_by_key(|(b, ..)| b.id);
+    let parts: Vec<SurfacePart> = bodies
+        .iter()
+        .map(|(b, st, h, surf)| SurfacePart {
+            name: &b.name,
+            mesh: &surf.0,
+            center: st.center,
+            orientation: st.orientation,
+            vectors: vec![st.velocity, st.angular_velocity, h.force],
+        })
+        .collect();
+    series
+        .write(index, sim.time(), &parts)
+        .with_context(|| format!("cannot write bodies_{index:06}.vtp or bodies.pvd"))
+}
+
 /// Call `f` with the fields of a snapshot of `sim`, in the scene's `output.fields` order:
-/// `omega`, `velocity`, and with bodies `density`, `chi`, `phi` (φ is -∞ far from every body:
-/// clamped at -1e30, as readers choke on infinities).
+/// `omega`, `velocity`, and with bodies `density`, `chi`, `phi` (φ clamped below at minus the
+/// band kept around each body, [`crate::bodies::band`]: where no body's band reaches, φ is
+/// -∞ in memory and readers choke on infinities and sentinels).
 fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
     let fl = sim.fields();
     let omega: Vec<&[f64]> = fl.omega().iter().map(|c| c.as_slice()).collect();
     let u: Vec<&[f64]> = fl.u.iter().map(|c| c.as_slice()).collect();
     let bf = sim.world.get_resource::<crate::bodies::BodyFields>();
+    let phi_min = -crate::bodies::band(sim.grid());
     let phi: Vec<f64> = bf
-        .map(|b| b.phi.iter().map(|p| p.max(-1e30)).collect())
+        .map(|b| b.phi.iter().map(|p| p.max(phi_min)).collect())
         .unwrap_or_default();
     type Comps<'a> = Vec<&'a [f64]>;
     let (rho, chi, phi): (Comps, Comps, Comps) = match bf {

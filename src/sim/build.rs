@@ -6,8 +6,8 @@ use crate::base::grid::Grid;
 use crate::bodies::contact::ContactParams;
 use crate::bodies::levelset::LocalLevelSet;
 use crate::bodies::{
-    Body, BodyKind, BodyShape, ContactPoints, ContactState, FreeMotion, GridPatch, Hydro, Material,
-    PreviousVelocity, RigidState, angular3, band, vec3,
+    Body, BodyKind, BodyShape, BodySurface, ContactPoints, ContactState, FreeMotion, GridPatch,
+    Hydro, Material, PreviousVelocity, RigidState, angular3, band, vec3,
 };
 use crate::scene::ValidScene;
 use bevy_ecs::prelude::*;
@@ -60,6 +60,11 @@ pub fn contact_params(scene: &ValidScene, h: f64) -> ContactParams {
 /// returns how many.
 pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyhow::Result<usize> {
     let rho_f = scene.fluid.density;
+    // A half-space is drawn as a square patch as wide as the domain's diagonal.
+    let diagonal = {
+        let e = grid.extent();
+        (0..grid.dim).map(|a| e[a] * e[a]).sum::<f64>().sqrt()
+    };
     for (id, (spec, geom)) in scene.bodies.iter().zip(scene.geometries()).enumerate() {
         let level_set = LocalLevelSet::new(geom.clone(), grid.h, band(grid), grid.dim);
         let eps = scene.contact.eps.unwrap_or(grid.h);
@@ -136,6 +141,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
                 angular_velocity,
             },
             contact_points,
+            BodySurface(geom.surface(diagonal)),
         ));
     }
     Ok(scene.bodies.len())
