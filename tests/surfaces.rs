@@ -16,22 +16,22 @@ fn tessellations_have_the_shapes_area_and_perimeter() {
     // An inscribed UV sphere with 16 latitude bands and 32 meridians falls short of 4 pi r^2
     // by about (pi/16)^2/3 = 1.3%: 3% bounds it. A 96-gon's perimeter is within
     // (2 pi/96)^2/6 = 0.07% of 2 pi r.
-    let s = geom(Shape::Sphere { radius: 0.5 }).surface(1.0);
+    let s = geom(Shape::Sphere { radius: 0.5 }).surface(1.0, 3);
     let a = s.measure();
     assert!((a / (PI) - 1.0).abs() < 0.03, "sphere area {a} vs {PI}");
     assert!(s.lines.is_empty() && !s.triangles.is_empty());
-    let d = geom(Shape::Disk { radius: 0.25 }).surface(1.0);
+    let d = geom(Shape::Disk { radius: 0.25 }).surface(1.0, 3);
     let l = d.measure();
     assert!((l / (0.5 * PI) - 1.0).abs() < 1e-3, "disk perimeter {l}");
     // A box's area is exact: 2 (ab + bc + ca) with full sides 0.2, 0.4, 0.6.
     let b = geom(Shape::Box {
         half_extents: [0.1, 0.2, 0.3],
     })
-    .surface(1.0);
+    .surface(1.0, 3);
     assert!((b.measure() - 2.0 * (0.08 + 0.24 + 0.12)).abs() < 1e-12);
     // Every surface point of a sphere is on the sphere (phi = 0 to round-off).
     let g = geom(Shape::Sphere { radius: 0.5 });
-    for p in &g.surface(1.0).points {
+    for p in &g.surface(1.0, 3).points {
         assert!(g.phi(*p).abs() < 1e-12);
     }
     // A cylinder along the body's z: its tessellation's points satisfy phi = 0 too.
@@ -39,7 +39,7 @@ fn tessellations_have_the_shapes_area_and_perimeter() {
         radius: 0.2,
         half_height: 0.5,
     });
-    for p in &c.surface(1.0).points {
+    for p in &c.surface(1.0, 3).points {
         assert!(
             c.phi(*p).abs() < 1e-12,
             "cylinder point {p} has phi {}",
@@ -52,11 +52,11 @@ fn tessellations_have_the_shapes_area_and_perimeter() {
 fn a_snapshot_parses_and_places_each_part_at_its_pose() {
     let dir = std::env::temp_dir().join(format!("tumble-surfaces-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let sphere = geom(Shape::Sphere { radius: 0.1 }).surface(1.0);
+    let sphere = geom(Shape::Sphere { radius: 0.1 }).surface(1.0, 3);
     let cube = geom(Shape::Box {
         half_extents: [0.1, 0.1, 0.1],
     })
-    .surface(1.0);
+    .surface(1.0, 3);
     let rot = DQuat::from_rotation_z(0.3);
     let parts = [
         SurfacePart {

@@ -387,9 +387,9 @@ impl ShapeGeometry {
 
     /// The boundary of the solid in the body frame, for viewing (see
     /// [`crate::bodies::surface`]): `half_size` is the half-width of the patch drawn for a
-    /// half-space (length).
-    pub fn surface(&self, half_size: f64) -> SurfaceMesh {
-        self.kind.surface(half_size)
+    /// half-space (length); in a 2D domain (`dim` 2) a half-space is a line segment.
+    pub fn surface(&self, half_size: f64, dim: usize) -> SurfaceMesh {
+        self.kind.surface(half_size, dim)
     }
 
     /// The geometry whose complement this is, if it is a `Complement`.
@@ -416,7 +416,7 @@ fn rect_phi(p: DVec2, he: DVec2) -> f64 {
 }
 
 impl Kind {
-    fn surface(&self, half_size: f64) -> SurfaceMesh {
+    fn surface(&self, half_size: f64, dim: usize) -> SurfaceMesh {
         use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder};
         // parry's cylinders and capsules run along y; ours along the body's z.
         let y_to_z = |p: DVec3| DVec3::new(p.x, -p.z, p.y);
@@ -453,6 +453,14 @@ impl Kind {
                 // The plane n.x = offset (the solid is n.x <= offset or >= offset: either way
                 // its boundary is this plane).
                 let c = *n * *offset;
+                if dim == 2 {
+                    let t = DVec3::new(-n.y, n.x, 0.0).normalize_or_zero() * half_size;
+                    return SurfaceMesh {
+                        points: vec![c - t, c + t],
+                        triangles: Vec::new(),
+                        lines: vec![[0, 1]],
+                    };
+                }
                 let (u, w) = n.any_orthonormal_pair();
                 let (u, w) = (u * half_size, w * half_size);
                 SurfaceMesh {
@@ -471,7 +479,7 @@ impl Kind {
                 DVec3::new(he.x, he.y, 0.0),
                 DVec3::new(-he.x, he.y, 0.0),
             ]),
-            Kind::Complement(inner) => inner.surface(half_size),
+            Kind::Complement(inner) => inner.surface(half_size, dim),
             Kind::Mesh(m) => SurfaceMesh {
                 points: m
                     .trimesh

@@ -141,7 +141,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
                 angular_velocity,
             },
             contact_points,
-            BodySurface(geom.surface(diagonal)),
+            BodySurface(geom.surface(diagonal, grid.dim)),
         ));
     }
     Ok(scene.bodies.len())
