@@ -4,8 +4,10 @@
 //!
 //!   Δt = min(C / max|ω|, Δt_max, CFL h / max|u|, D h²/ν (only with bodies))
 //!
-//! (the paper's Δt = C / max|ω| keeps particles from crossing, dt |∇u| < 1), shortened to land
-//! exactly on the next output or end time. It records kinetic energy ½⟨|u|²⟩, enstrophy
+//! (the paper's Δt = C / max|ω| keeps particles from crossing, dt |∇u| < 1), or the fixed step,
+//! shortened to land exactly on [`SimTime::stop_at`]: the end time, and with an Adaptive step
+//! the next output time too (`tumble run` decides, see
+//! [`crate::base::params::TimeStep`]). It records kinetic energy ½⟨|u|²⟩, enstrophy
 //! ½⟨|ω|²⟩ (both per unit volume), circulation and max|ω|, and stops the run with a message
 //! naming the quantity, the place and the step when a value is not finite, max|ω| grows beyond
 //! `blowup_factor` times its initial value, or a fixed step is far beyond the CFL limit.
