@@ -173,12 +173,19 @@ pub fn next_dt(
     land_on(t, dt, stop_at)
 }
 
-/// Shorten `dt` so that the clock lands exactly on `stop_at`, without leaving a sliver.
+/// How much longer than `dt` the last step before a stop time may be (relative): the clock is
+/// a sum of steps, so after N steps of a `Fixed` dt that divides the end time it misses it by
+/// up to about N² ε dt; the rest is then taken as one step rather than split in two.
+pub const LAND_TOLERANCE: f64 = 1e-6;
+
+/// Shorten `dt` so that the clock lands exactly on `stop_at`, without leaving a sliver: the
+/// rest is one step when it is at most `dt` (or longer by [`LAND_TOLERANCE`]), two halves when
+/// it is less than two steps.
 pub fn land_on(t: f64, dt: f64, stop_at: Option<f64>) -> f64 {
     match stop_at {
         Some(stop) if stop > t => {
             let rest = stop - t;
-            if rest <= dt * (1.0 + 1e-12) {
+            if rest <= dt * (1.0 + LAND_TOLERANCE) {
                 rest
             } else if rest < 2.0 * dt {
                 0.5 * rest

@@ -180,6 +180,24 @@ const VACUUM: &str = r#"Scene(
     output: (every: 0.1, fields: []),
 )"#;
 
+/// A `Fixed` step that divides the end time takes exactly end / dt steps of dt, although the
+/// clock (a sum of steps) misses the end time by a few ulps without output times to land on.
+#[test]
+fn fixed_dt_dividing_the_end_time_takes_whole_steps() {
+    let d = Scratch::new("whole");
+    let text = VACUUM
+        .replace("Fixed(0.001), end_time: 0.3", "Fixed(0.005), end_time: 1.5")
+        .replace("every: 0.1", "every: 0.5");
+    let (summary, dir) = run(d.path(), "whole", &text);
+    assert_eq!(summary.steps, 300);
+    let series = series_times(&dir);
+    for &(_, dt) in &series[1..300] {
+        assert_eq!(dt.to_bits(), 0.005f64.to_bits());
+    }
+    assert!((series[300].1 - 0.005).abs() < 1e-12);
+    assert_eq!(summary.last.t, 1.5);
+}
+
 /// The fluid alone (no bodies).
 const FLUID: &str = r#"Scene(
     name: "timings-fluid",

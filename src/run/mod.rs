@@ -8,6 +8,7 @@ use crate::io::runlog::RunLog;
 use crate::io::snapshots::Snapshots;
 use crate::scene::{Scene, ValidScene};
 use crate::sim::engine::Simulation;
+use crate::systems::diagnostics::LAND_TOLERANCE;
 use anyhow::Context;
 pub mod csv;
 pub mod outdir;
@@ -487,8 +488,10 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
             }
             // A snapshot after the first step at or after each output time (with its true
             // time), and at the end; then the checkpoint.
+            // An output time missed by the rounding of the clock (a sum of steps) is reached.
             let t = run.sim.time();
-            let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12));
+            let slack = LAND_TOLERANCE * run.sim.sample().dt;
+            let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
             if due(run.next_out) || t >= end * (1.0 - 1e-12) {
                 write_snapshot(&run.sim, &mut run.snaps)?;
                 if let Some(e) = every {
