@@ -260,6 +260,12 @@ impl Scheduler {
         sink.clear();
     }
 
+    /// The names of the systems of the step schedule, in the order they were added (the
+    /// startup systems are not among them unless they also run at every step).
+    pub fn step_systems(&self) -> &[&'static str] {
+        &self.names
+    }
+
     /// The checkpoint records of every registered resource, in registration order.
     pub fn save_state(&self, world: &World) -> Result<Vec<StateRecord>, String> {
         self.state

@@ -4,14 +4,17 @@
 //!
 //!   Δt = min(C / max|ω|, Δt_max, CFL h / max|u|, D h²/ν (only with bodies))
 //!
-//! (the paper's Δt = C / max|ω| keeps particles from crossing, dt |∇u| < 1), shortened to land
-//! exactly on the next output or end time. It records kinetic energy ½⟨|u|²⟩, enstrophy
+//! (the paper's Δt = C / max|ω| keeps particles from crossing, dt |∇u| < 1), or the fixed step,
+//! shortened to land exactly on [`SimTime::stop_at`]: the end time, and with an Adaptive step
+//! the next output time too (`tumble run` decides, see
+//! [`crate::base::params::TimeStep`]). It records kinetic energy ½⟨|u|²⟩, enstrophy
 //! ½⟨|ω|²⟩ (both per unit volume), circulation and max|ω|, and stops the run with a message
 //! naming the quantity, the place and the step when a value is not finite, max|ω| grows beyond
 //! `blowup_factor` times its initial value, or a fixed step is far beyond the CFL limit.
 //!
 //! Sums are taken per grid row and then added in row order, so they do not depend on the
-//! number of threads.
+//! number of threads. Fields that no system changed since the last step (a vacuum run's) are
+//! not measured again: their sample is the last one.
 
 use crate::base::fields::{Fields, Params, Sample, SimTime};
 use crate::base::grid::Grid;
@@ -171,12 +174,19 @@ pub fn next_dt(
     land_on(t, dt, stop_at)
 }
 
-/// Shorten `dt` so that the clock lands exactly on `stop_at`, without leaving a sliver.
+/// How much longer than `dt` the last step before a stop time may be (relative): the clock is
+/// a sum of steps, so after N steps of a `Fixed` dt that divides the end time it misses it by
+/// up to about N² ε dt; the rest is then taken as one step rather than split in two.
+pub const LAND_TOLERANCE: f64 = 1e-6;
+
+/// Shorten `dt` so that the clock lands exactly on `stop_at`, without leaving a sliver: the
+/// rest is one step when it is at most `dt` (or longer by [`LAND_TOLERANCE`]), two halves when
+/// it is less than two steps.
 pub fn land_on(t: f64, dt: f64, stop_at: Option<f64>) -> f64 {
     match stop_at {
         Some(stop) if stop > t => {
             let rest = stop - t;
-            if rest <= dt * (1.0 + 1e-12) {
+            if rest <= dt * (1.0 + LAND_TOLERANCE) {
                 rest
             } else if rest < 2.0 * dt {
                 0.5 * rest
@@ -233,7 +243,12 @@ pub fn diagnostics(
 ) {
     time.t += time.dt;
     time.step += 1;
-    let (mut s, nan_at, wmax_at) = diag.measure(&grid, &fields);
+    // Fields no system changed since the last measure (a vacuum run's) measure the same.
+    let (mut s, nan_at, wmax_at) = if fields.is_changed() {
+        diag.measure(&grid, &fields)
+    } else {
+        (diag.sample, None, 0)
+    };
     s.t = time.t;
     s.dt = time.dt;
     let step = time.step;

@@ -5,12 +5,24 @@
 use serde::{Deserialize, Serialize};
 
 /// How the time step is chosen.
+///
+/// Output times and the end time (what `tumble run` does; see [`TimeStep::lands_on_outputs`]):
+/// - `Fixed`: every step is the step asked for, so the result does not depend on
+///   `output.every`. A snapshot is written after the first step at or after each output time
+///   and carries that step's time (not the output time). Only the end time is landed on: the
+///   last step is shortened to end exactly on it (the last two, halved, when less than two
+///   steps remain, so no sliver of a step is left), which changes no earlier step.
+/// - `Adaptive`: steps are shortened to land exactly on each output time and on the end time,
+///   so snapshots are at the output times. The steps that follow depend on the state, so the
+///   result depends on `output.every`, within the time discretization error (the shortened
+///   step still meets every bound of the policy).
 #[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub enum TimeStep {
-    /// A fixed time step, time units.
+    /// A fixed time step, time units (shortened only to land on the end time).
     Fixed(f64),
-    /// dt = min(c / max|ω|, dt_max, cfl h / max|u|) (paper section 4.2.2).
+    /// dt = min(c / max|ω|, dt_max, cfl h / max|u|) (paper section 4.2.2), shortened to land
+    /// on each output time and the end time.
     Adaptive {
         /// Lagrangian CFL number c (dimensionless): particles do not cross within a step while
         /// dt |∇u| < 1. Default: 0.5.
@@ -47,6 +59,14 @@ fn default_c() -> f64 {
 }
 fn default_cfl() -> f64 {
     4.0
+}
+
+impl TimeStep {
+    /// Whether steps are shortened to land exactly on output times (`Adaptive`), or only on
+    /// the end time (`Fixed`: the step asked for, whatever the outputs).
+    pub fn lands_on_outputs(&self) -> bool {
+        matches!(self, TimeStep::Adaptive { .. })
+    }
 }
 
 impl Default for TimeStep {

@@ -8,6 +8,7 @@ use crate::io::runlog::RunLog;
 use crate::io::snapshots::Snapshots;
 use crate::scene::{Scene, ValidScene};
 use crate::sim::engine::Simulation;
+use crate::systems::diagnostics::LAND_TOLERANCE;
 use anyhow::Context;
 pub mod csv;
 pub mod outdir;
@@ -431,63 +432,73 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
     let mut last_tenth = ((run.sim.time() / end).clamp(0.0, 1.0) * 10.0).floor() as u32;
     let result: anyhow::Result<()> = (|| {
         let run = &mut run;
+        // The time the steps land on: the next output time with an Adaptive step, only the
+        // end time with a Fixed one (see `TimeStep`), so a Fixed run does not depend on the
+        // output times.
+        let lands_on_outputs = run.sim.scene().numerics.dt.lands_on_outputs();
+        let mut stop_at = None;
         while run.sim.time() < end * (1.0 - 1e-12) {
-            let stop = run.next_out.map_or(end, |o| o.min(end));
-            run.sim.set_stop_at(Some(stop));
-            while run.sim.time() < stop * (1.0 - 1e-12) {
-                if let Err(e) = run.sim.step() {
-                    return Err(run.failed(e));
-                }
-                let sim = &mut run.sim;
-                write_row(&mut run.series, &sim.sample())?;
-                if let Some(b) = run.bodies_csv.as_mut() {
-                    b.rows(sim)?;
-                }
-                if let Some(c) = run.contacts_csv.as_mut() {
-                    c.rows(sim)?;
-                }
-                run.snaps.record(sim);
-                for &(name, s) in &sim.timings().last {
-                    match totals.iter_mut().find(|e| e.0 == name) {
-                        Some(e) => e.1 += s,
-                        None => totals.push((name, s)),
-                    }
-                }
-                let frac = (sim.time() / end).clamp(0.0, 1.0);
-                let s = sim.sample();
-                bar.set_position((frac * 1000.0) as u64);
-                bar.set_message(format!(
-                    "step {} t = {:.4} dt = {:.2e} max|ω| = {:.3e}",
-                    sim.steps(),
-                    s.t,
-                    s.dt,
-                    s.max_omega
-                ));
-                let tenth = (frac * 10.0).floor() as u32;
-                if bar.is_hidden() && !opts.quiet && tenth > last_tenth {
-                    last_tenth = tenth;
-                    eprintln!(
-                        "  {:>3}%  step {}  t = {:.4}  max|ω| = {:.3e}  {:.1} s",
-                        tenth * 10,
-                        sim.steps(),
-                        s.t,
-                        s.max_omega,
-                        wall0.elapsed().as_secs_f64()
-                    );
-                }
-                // At the end of the interval the snapshot comes first, then the checkpoint.
-                if run.sim.time() < stop * (1.0 - 1e-12) {
-                    run.after_step(end)?;
+            let stop = match run.next_out {
+                Some(o) if lands_on_outputs => o.min(end),
+                _ => end,
+            };
+            if stop_at != Some(stop) {
+                run.sim.set_stop_at(Some(stop));
+                stop_at = Some(stop);
+            }
+            if let Err(e) = run.sim.step() {
+                return Err(run.failed(e));
+            }
+            let sim = &mut run.sim;
+            write_row(&mut run.series, &sim.sample())?;
+            if let Some(b) = run.bodies_csv.as_mut() {
+                b.rows(sim)?;
+            }
+            if let Some(c) = run.contacts_csv.as_mut() {
+                c.rows(sim)?;
+            }
+            run.snaps.record(sim);
+            for &(name, s) in &sim.timings().last {
+                match totals.iter_mut().find(|e| e.0 == name) {
+                    Some(e) => e.1 += s,
+                    None => totals.push((name, s)),
                 }
             }
-            if run
-                .next_out
-                .is_some_and(|o| run.sim.time() >= o * (1.0 - 1e-12))
-                || run.sim.time() >= end * (1.0 - 1e-12)
-            {
+            let frac = (sim.time() / end).clamp(0.0, 1.0);
+            let s = sim.sample();
+            bar.set_position((frac * 1000.0) as u64);
+            bar.set_message(format!(
+                "step {} t = {:.4} dt = {:.2e} max|ω| = {:.3e}",
+                sim.steps(),
+                s.t,
+                s.dt,
+                s.max_omega
+            ));
+            let tenth = (frac * 10.0).floor() as u32;
+            if bar.is_hidden() && !opts.quiet && tenth > last_tenth {
+                last_tenth = tenth;
+                eprintln!(
+                    "  {:>3}%  step {}  t = {:.4}  max|ω| = {:.3e}  {:.1} s",
+                    tenth * 10,
+                    sim.steps(),
+                    s.t,
+                    s.max_omega,
+                    wall0.elapsed().as_secs_f64()
+                );
+            }
+            // A snapshot after the first step at or after each output time (with its true
+            // time), and at the end; then the checkpoint.
+            // An output time missed by the rounding of the clock (a sum of steps) is reached.
+            let t = run.sim.time();
+            let slack = LAND_TOLERANCE * run.sim.sample().dt;
+            let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
+            if due(run.next_out) || t >= end * (1.0 - 1e-12) {
                 write_snapshot(&run.sim, &mut run.snaps)?;
                 if let Some(e) = every {
-                    run.next_out = run.next_out.map(|o| o + e);
+                    // A step longer than `every` passes several output times: one snapshot.
+                    while let Some(o) = run.next_out.filter(|&o| due(Some(o)) && o + e > o) {
+                        run.next_out = Some(o + e);
+                    }
                 }
             }
             run.after_step(end)?;

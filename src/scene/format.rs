@@ -170,7 +170,9 @@ impl Default for Fluid {
 pub struct Numerics {
     /// Time step policy. Default: `Adaptive(c: 0.5)`.
     pub dt: TimeStep,
-    /// Simulated time at which the run ends, time units, > 0. Default: 1.
+    /// Simulated time at which the run ends, time units, > 0. The run lands on it exactly:
+    /// the last step is shortened (the last two, halved, when less than two steps remain),
+    /// with a `Fixed` step too. Default: 1.
     pub end_time: f64,
     /// Particle creation cutoff, relative to max|ω| (dimensionless, in [0, 1)): grid nodes with
     /// |ω| at or below `remesh_cutoff * max|ω|` create no particle and keep their (small)
@@ -335,7 +337,10 @@ pub enum FieldName {
 #[serde(deny_unknown_fields, default)]
 pub struct Output {
     /// Simulated time between field snapshots, time units; `None` writes only the first and
-    /// the last. Default: None.
+    /// the last. With a `Fixed` step a snapshot is written after the first step at or after
+    /// each output time and carries that step's time, so the run does not depend on this
+    /// interval; an `Adaptive` step is shortened to land on each output time (see
+    /// `TimeStep`). Default: None.
     pub every: Option<f64>,
     /// Fields in each snapshot. Default: `[Omega, Velocity]`.
     pub fields: Vec<FieldName>,

@@ -132,6 +132,12 @@ impl Simulation {
     }
 
     /// Step until `t_end` (landing on it exactly), calling `each` after every step.
+    ///
+    /// Landing on `t_end` shortens the last step (the last two when less than two steps
+    /// remain), with a `Fixed` step too: calling this at intermediate times changes the steps
+    /// that follow. To sample a `Fixed` run at times without changing it, set the end time with
+    /// [`Simulation::set_stop_at`] once and step while [`Simulation::time`] is before each
+    /// sample time, as `tumble run` does for its snapshots.
     pub fn run_until(
         &mut self,
         t_end: f64,
@@ -145,7 +151,9 @@ impl Simulation {
         Ok(())
     }
 
-    /// Make the clock land exactly on `t` (an output or end time).
+    /// Make the clock land exactly on `t` (the end time, or with an Adaptive step an output
+    /// time; see [`crate::base::params::TimeStep`]): the steps are shortened as they come
+    /// near it. `None` lands nowhere. The next step is recomputed now.
     pub fn set_stop_at(&mut self, t: Option<f64>) {
         let h = self.grid().h;
         let diag = self.world.resource::<Diagnostics>();
@@ -162,6 +170,11 @@ impl Simulation {
         let mut time = self.world.resource_mut::<SimTime>();
         time.stop_at = t;
         time.dt = dt;
+    }
+
+    /// The names of the systems run at every step, in the order they were added.
+    pub fn step_systems(&self) -> &[&'static str] {
+        self.scheduler.step_systems()
     }
 
     /// Why the run must stop, if it must.
@@ -199,7 +212,8 @@ impl Simulation {
         self.world.resource::<Diagnostics>().sample
     }
 
-    /// Per-system time of the last step.
+    /// Per-system wall-clock time of the last step (after [`Simulation::new`], of the startup
+    /// systems): only the systems that ran in it are listed.
     pub fn timings(&self) -> &Timings {
         self.world.resource::<Timings>()
     }
