@@ -155,7 +155,9 @@ pub fn allowed_dt(policy: &TimeStep, sample: &Sample, h: f64, fallback: f64, vis
     }
 }
 
-/// The next step: what the policy allows for `sample`, landed on `stop_at`.
+/// The next step: what the policy allows for `sample`; an adaptive step is landed on
+/// `stop_at`, a `Fixed` one never changes (the run ends at the first step at or after its end
+/// time), so a run stopped early and restarted takes the very steps of one that never stopped.
 pub fn next_dt(
     params: &Params,
     sample: &Sample,
@@ -171,7 +173,11 @@ pub fn next_dt(
         fallback,
         params.viscous_rate(h),
     );
-    land_on(t, dt, stop_at)
+    if params.dt_policy.lands_on_outputs() {
+        land_on(t, dt, stop_at)
+    } else {
+        dt
+    }
 }
 
 /// How much longer than `dt` the last step before a stop time may be (relative): the clock is

@@ -7,11 +7,11 @@ use serde::{Deserialize, Serialize};
 /// How the time step is chosen.
 ///
 /// Output times and the end time (what `tumble run` does; see [`TimeStep::lands_on_outputs`]):
-/// - `Fixed`: every step is the step asked for, so the result does not depend on
-///   `output.every`. A snapshot is written after the first step at or after each output time
-///   and carries that step's time (not the output time). Only the end time is landed on: the
-///   last step is shortened to end exactly on it (the last two, halved, when less than two
-///   steps remain, so no sliver of a step is left), which changes no earlier step.
+/// - `Fixed`: every step is the step asked for, so the result depends neither on
+///   `output.every` nor on where a run was stopped and restarted. A snapshot is written after
+///   the first step at or after each output time and carries that step's time (not the output
+///   time); the run ends at the first step at or after the end time (to rounding: a `dt` that
+///   divides the end time ends on it), so it may end up to one step past it.
 /// - `Adaptive`: steps are shortened to land exactly on each output time and on the end time,
 ///   so snapshots are at the output times. The steps that follow depend on the state, so the
 ///   result depends on `output.every`, within the time discretization error (the shortened

@@ -170,9 +170,9 @@ impl Default for Fluid {
 pub struct Numerics {
     /// Time step policy. Default: `Adaptive(c: 0.5)`.
     pub dt: TimeStep,
-    /// Simulated time at which the run ends, time units, > 0. The run lands on it exactly:
-    /// the last step is shortened (the last two, halved, when less than two steps remain),
-    /// with a `Fixed` step too. Default: 1.
+    /// Simulated time at which the run ends, time units, > 0. An adaptive run lands on it
+    /// exactly (the last step shortened, the last two halved when less than two steps
+    /// remain); a `Fixed` run ends at the first step at or after it. Default: 1.
     pub end_time: f64,
     /// Particle creation cutoff, relative to max|ω| (dimensionless, in [0, 1)): grid nodes with
     /// |ω| at or below `remesh_cutoff * max|ω|` create no particle and keep their (small)
