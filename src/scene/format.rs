@@ -345,14 +345,15 @@ pub struct Output {
     /// `Hdf5` (`fields_NNNNNN.h5` + `fields.xmf`, and the body and contact series in
     /// `series.h5`; needs a build with `--features hdf5`). At least one. Default: `[Vtk]`.
     pub formats: Vec<OutputFormat>,
-    /// Simulated time between checkpoints (`checkpoint.bin` in the run directory, replaced
-    /// each time; `tumble run --restart` continues from it), time units; `tumble run
+    /// Simulated time between checkpoints (`checkpoint_NNNNNN.bin` in the run directory,
+    /// named by step, the latest `checkpoints_kept` kept; `tumble run --restart DIR`
+    /// continues from the latest), time units; `tumble run
     /// --checkpoint-every` overrides it. `None` writes a checkpoint only when the run is
     /// interrupted (Ctrl-C, SIGTERM). Default: None.
     pub checkpoint_every: Option<f64>,
     /// How many checkpoints are kept in the run directory (`checkpoint_NNNNNN.bin`, named by
     /// step; older ones that tumble wrote are deleted once a newer one is complete), ≥ 1.
-    /// A restart may change it. Default: 2.
+    /// Default: 2.
     pub checkpoints_kept: usize,
     /// Floating-point precision of the field snapshots' arrays (VTK and HDF5): `Single`
     /// (32-bit, about 7 significant digits, half the size) or `Double` (64-bit, the values
