@@ -57,7 +57,8 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// The checkpoint's file name in a run directory.
+/// The single checkpoint file of runs written by earlier tumble versions, which `--restart DIR`
+/// still finds (this version writes [`file_name`]).
 pub const FILE_NAME: &str = "checkpoint.bin";
 /// Name prefix of the numbered checkpoints a run keeps (`checkpoint_NNNNNN.bin`, the step).
 const PREFIX: &str = "checkpoint_";
