@@ -403,6 +403,15 @@ fn the_latest_checkpoints_are_kept_and_restart_dir_takes_the_latest() {
     ok(&run(&["run", s(&scene), "--out", s(&straight), "--quiet"]));
     // Checkpoints every 0.03 to t = 0.2 (at t = 0.03, 0.06, ..., 0.18 and the end): 7 are
     // written, the default keeps the last 2.
+    // A run directory without checkpoints is refused (status 2), naming it.
+    let o = run(&["run", "--restart", s(&straight), "--until", "0.4"]);
+    assert_eq!(o.status.code(), Some(2), "{:?}", o.status);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("cannot restart from {}", straight.display()))
+            && err.contains("no checkpoint"),
+        "{err}"
+    );
     let stopped = d.join("stopped");
     let args = |out: &Path, kept: Option<&str>| {
         let mut text = BOX_2D.to_string();
