@@ -44,12 +44,14 @@ enum Command {
         /// No progress output.
         #[arg(long)]
         quiet: bool,
-        /// Write a checkpoint (checkpoint.bin in the run directory) every T of simulated time,
-        /// overriding the scene's output.checkpoint_every.
+        /// Write a checkpoint (checkpoint_NNNNNN.bin in the run directory, named by step; the
+        /// latest output.checkpoints_kept are kept) every T of simulated time, overriding the
+        /// scene's output.checkpoint_every.
         #[arg(long, value_name = "T")]
         checkpoint_every: Option<f64>,
-        /// Continue a run from a checkpoint, appending to its run directory (the checkpoint's).
-        #[arg(long, value_name = "CHECKPOINT", conflicts_with_all = ["out", "force"])]
+        /// Continue a run from a checkpoint, appending to its run directory (the checkpoint's):
+        /// a checkpoint file, or a run directory (then its latest complete checkpoint).
+        #[arg(long, value_name = "DIR|CHECKPOINT", conflicts_with_all = ["out", "force"])]
         restart: Option<PathBuf>,
     },
     /// Load and validate a scene, print what it will compute, run nothing.

@@ -230,6 +230,11 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// The latest complete checkpoint in the run directory `dir`.
+fn latest(dir: &Path) -> PathBuf {
+    checkpoint::resolve(dir).unwrap_or_else(|e| panic!("{e}"))
+}
+
 fn run(args: &[&str]) -> Output {
     tumble().args(args).output().unwrap()
 }
@@ -315,7 +320,9 @@ fn reference_long() -> &'static Path {
 fn wait_for_checkpoint(child: &mut std::process::Child, dir: &Path, t: f64) -> Checkpoint {
     let start = Instant::now();
     loop {
-        if let Ok(ck) = Checkpoint::load(&dir.join(checkpoint::FILE_NAME))
+        if let Some(ck) = checkpoint::resolve(dir)
+            .ok()
+            .and_then(|p| Checkpoint::load(&p).ok())
             && ck.time.t >= t
         {
             return ck;
@@ -349,7 +356,7 @@ fn cli_restart_continues_the_run_bit_for_bit() {
         "0.07",
         "--quiet",
     ]));
-    let ck = stopped.join(checkpoint::FILE_NAME);
+    let ck = latest(&stopped);
     let c = Checkpoint::load(&ck).unwrap();
     assert_eq!(c.time.t, 0.2);
     assert_eq!(c.progress.pvd.len(), 3);
@@ -359,9 +366,132 @@ fn cli_restart_continues_the_run_bit_for_bit() {
     let log = std::fs::read_to_string(stopped.join("log.txt")).unwrap();
     assert!(log.contains("restart from"), "{log}");
     assert!(log.contains("finished: 75 steps"), "{log}");
+    // The checkpoint at t = 0.2 was deleted once two later ones were written (t = 0.21 and
+    // 0.28 with checkpoints every 0.07, and the end, 0.3).
+    assert!(!ck.exists(), "{} was kept", ck.display());
+    assert_eq!(Checkpoint::load(&latest(&stopped)).unwrap().time.t, 0.3);
     // The scene file may be given again; it must be the checkpoint's.
-    let o = run(&["run", s(&scene), "--restart", s(&ck), "--until", "0.35"]);
+    let o = run(&[
+        "run",
+        s(&scene),
+        "--restart",
+        s(&stopped),
+        "--until",
+        "0.35",
+    ]);
     ok(&o);
+}
+
+/// The numbered checkpoints in `dir`: (step, t), by step.
+fn checkpoints(dir: &Path) -> Vec<(u64, f64)> {
+    checkpoint::list(dir)
+        .unwrap()
+        .iter()
+        .map(|(step, p)| {
+            let c = Checkpoint::load(p).unwrap();
+            assert_eq!(c.time.step, *step, "{} is named by its step", p.display());
+            (*step, c.time.t)
+        })
+        .collect()
+}
+
+#[test]
+fn the_latest_checkpoints_are_kept_and_restart_dir_takes_the_latest() {
+    let d = tmp("kept");
+    let scene = scene_file(&d);
+    let straight = d.join("straight");
+    ok(&run(&["run", s(&scene), "--out", s(&straight), "--quiet"]));
+    // Checkpoints every 0.03 to t = 0.2 (at t = 0.03, 0.06, ..., 0.18 and the end): 7 are
+    // written, the default keeps the last 2.
+    // A run directory without checkpoints is refused (status 2), naming it.
+    let o = run(&["run", "--restart", s(&straight), "--until", "0.4"]);
+    assert_eq!(o.status.code(), Some(2), "{:?}", o.status);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("cannot restart from {}", straight.display()))
+            && err.contains("no checkpoint"),
+        "{err}"
+    );
+    let stopped = d.join("stopped");
+    let args = |out: &Path, kept: Option<&str>| {
+        let mut text = BOX_2D.to_string();
+        if let Some(k) = kept {
+            text = text.replacen("output: (", &format!("output: (checkpoints_kept: {k}, "), 1);
+        }
+        let f = out.with_extension("ron");
+        std::fs::write(&f, text).unwrap();
+        f
+    };
+    let scene2 = args(&stopped, None);
+    ok(&run(&[
+        "run",
+        s(&scene2),
+        "--out",
+        s(&stopped),
+        "--until",
+        "0.2",
+        "--checkpoint-every",
+        "0.03",
+        "--quiet",
+    ]));
+    let ck = checkpoints(&stopped);
+    assert_eq!(ck.len(), 2, "{ck:?}");
+    assert_eq!(ck[1].1, 0.2, "the last one is the run's end: {ck:?}");
+    assert!(ck[0].1 >= 0.18 && ck[0].1 < 0.2, "{ck:?}");
+    assert_eq!(
+        latest(&stopped),
+        stopped.join(checkpoint::file_name(ck[1].0))
+    );
+    // --restart DIR continues from the latest (t = 0.2) and matches the run that never
+    // stopped.
+    let o = run(&["run", "--restart", s(&stopped), "--until", "0.3", "--quiet"]);
+    ok(&o);
+    assert_same_outputs(&straight, &stopped);
+    let log = std::fs::read_to_string(stopped.join("log.txt")).unwrap();
+    let from = format!(
+        "restart from {} at step {}",
+        stopped.join(checkpoint::file_name(ck[1].0)).display(),
+        ck[1].0
+    );
+    assert!(log.contains(&from), "{log}");
+
+    // checkpoints_kept: 3 keeps 3, also when a restart goes on (to t = 0.3: checkpoints at
+    // 0.21, 0.24, 0.27 and 0.3); other files in the directory are left alone.
+    let three = d.join("three");
+    let scene3 = args(&three, Some("3"));
+    ok(&run(&[
+        "run",
+        s(&scene3),
+        "--out",
+        s(&three),
+        "--until",
+        "0.2",
+        "--checkpoint-every",
+        "0.03",
+        "--quiet",
+    ]));
+    let ck3 = checkpoints(&three);
+    assert_eq!(ck3.len(), 3, "{ck3:?}");
+    assert_eq!(&ck3[1..], &ck[..], "the same latest checkpoints");
+    let foreign = ["checkpoint_12.bin", "checkpoint_000001.bin.bak", "mine.bin"];
+    for name in foreign {
+        std::fs::write(three.join(name), b"not tumble's").unwrap();
+    }
+    ok(&run(&[
+        "run",
+        "--restart",
+        s(&three),
+        "--until",
+        "0.3",
+        "--quiet",
+    ]));
+    let ck3 = checkpoints(&three);
+    assert_eq!(ck3.len(), 3, "{ck3:?}");
+    assert_eq!(ck3[2].1, 0.3, "{ck3:?}");
+    assert!(ck3[0].1 > 0.2, "{ck3:?}");
+    for name in foreign {
+        assert!(three.join(name).exists(), "{name} was deleted");
+    }
 }
 
 #[test]
@@ -388,7 +518,7 @@ fn killed_run_leaves_whole_files_and_restarts() {
     child.kill().unwrap(); // SIGKILL
     child.wait().unwrap();
     // Every file that is not a temporary is whole.
-    let ck = Checkpoint::load(&out.join(checkpoint::FILE_NAME)).unwrap();
+    let ck = Checkpoint::load(&latest(&out)).unwrap();
     assert!(ck.time.t >= 0.3 && ck.time.t < 3.0);
     let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
     assert!(pvd.trim_end().ends_with("</VTKFile>"), "{pvd}");
@@ -408,12 +538,7 @@ fn killed_run_leaves_whole_files_and_restarts() {
             Scene::load(&out.join(&name)).unwrap();
         }
     }
-    let o = run(&[
-        "run",
-        "--restart",
-        s(&out.join(checkpoint::FILE_NAME)),
-        "--quiet",
-    ]);
+    let o = run(&["run", "--restart", s(&latest(&out)), "--quiet"]);
     ok(&o);
     for e in std::fs::read_dir(&out).unwrap() {
         let name = e.unwrap().file_name().into_string().unwrap();
@@ -456,7 +581,7 @@ fn sigint_stops_with_a_checkpoint_and_restarts() {
         stderr.contains("restart with tumble run --restart"),
         "{stderr}"
     );
-    let ck = Checkpoint::load(&out.join(checkpoint::FILE_NAME)).unwrap();
+    let ck = Checkpoint::load(&latest(&out)).unwrap();
     assert!(ck.time.t < 3.0, "the run was not stopped early");
     let log = std::fs::read_to_string(out.join("log.txt")).unwrap();
     let line = format!("interrupted at step {}, t = {}", ck.time.step, ck.time.t);
@@ -464,12 +589,7 @@ fn sigint_stops_with_a_checkpoint_and_restarts() {
     // Rows up to the checkpoint only (flushed).
     let rows = std::fs::read_to_string(out.join("series.csv")).unwrap();
     assert_eq!(rows.lines().count() as u64, ck.time.step + 2);
-    let o = run(&[
-        "run",
-        "--restart",
-        s(&out.join(checkpoint::FILE_NAME)),
-        "--quiet",
-    ]);
+    let o = run(&["run", "--restart", s(&latest(&out)), "--quiet"]);
     ok(&o);
     assert_same_outputs(reference_long(), &out);
 }
@@ -490,7 +610,7 @@ fn bad_checkpoints_are_refused() {
         "0.05",
         "--quiet",
     ]));
-    let good_path = out.join(checkpoint::FILE_NAME);
+    let good_path = latest(&out);
     let good = std::fs::read(&good_path).unwrap();
     let series_len = std::fs::metadata(out.join("series.csv")).unwrap().len();
     let refused = |file: &Path, extra: &[&str], what: &str| {
@@ -590,11 +710,11 @@ fn blow_up_keeps_the_last_good_checkpoint() {
     assert_eq!(o.status.code(), Some(1), "{:?}", o.status);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("blow-up"), "{err}");
-    let ck = Checkpoint::load(&out.join(checkpoint::FILE_NAME)).unwrap();
+    let ck = Checkpoint::load(&latest(&out)).unwrap();
     assert!(ck.time.step > 0, "the guard tripped before any checkpoint");
     let named = format!(
         "the last good checkpoint is {} (step {}, t = {})",
-        out.join(checkpoint::FILE_NAME).display(),
+        latest(&out).display(),
         ck.time.step,
         ck.time.t
     );
@@ -671,8 +791,8 @@ fn assert_same_outputs_h5(a: &Path, b: &Path) {
             .map(|e| e.unwrap().file_name().into_string().unwrap())
             .filter(|n| {
                 !n.ends_with(".png")
-                    && !["log.txt", "timings.csv", "scene.ron", checkpoint::FILE_NAME]
-                        .contains(&n.as_str())
+                    && checkpoint::step_of(n).is_none()
+                    && !["log.txt", "timings.csv", "scene.ron"].contains(&n.as_str())
             })
             .collect();
         v.sort();
@@ -737,7 +857,7 @@ fn hdf5_restart_reproduces_the_run(formats: &str, name: &str) {
         "0.07",
         "--quiet",
     ]));
-    let ck = stopped.join(checkpoint::FILE_NAME);
+    let ck = latest(&stopped);
     let at_02 = std::fs::read(&ck).unwrap();
     let c = Checkpoint::load(&ck).unwrap();
     assert_eq!(c.time.t, 0.2);

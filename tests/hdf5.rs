@@ -24,7 +24,7 @@ const SCENE_2D: &str = r#"Scene(
         (name: "disk", shape: Disk(radius: 0.12), density: 2.0, position: [0.1, 1.3]),
         (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.5), kind: Static, position: [0.0, 0.0]),
     ],
-    output: (every: 0.02, formats: [Vtk, Hdf5]),
+    output: (every: 0.02, formats: [Vtk, Hdf5], precision: Double),
 )"#;
 
 const SCENE_3D: &str = r#"Scene(
@@ -55,7 +55,8 @@ where
     s.split_whitespace().map(|x| x.parse().unwrap()).collect()
 }
 
-fn parse_xmf(path: &Path) -> Vec<Snap> {
+/// `precision`: the bytes per value every field dataset must be declared with.
+fn parse_xmf(path: &Path, precision: &str) -> Vec<Snap> {
     let text = std::fs::read_to_string(path).unwrap();
     let opts = roxmltree::ParsingOptions {
         allow_dtd: true,
@@ -97,7 +98,7 @@ fn parse_xmf(path: &Path) -> Vec<Snap> {
             };
             let item = a.children().find(|n| n.has_tag_name("DataItem")).unwrap();
             assert_eq!(item.attribute("Format"), Some("HDF"));
-            assert_eq!(item.attribute("Precision"), Some("8"));
+            assert_eq!(item.attribute("Precision"), Some(precision));
             let shape: Vec<usize> = nums(item.attribute("Dimensions").unwrap());
             let (file, dset) = item.text().unwrap().trim().split_once(':').unwrap();
             attrs.push((
@@ -162,7 +163,8 @@ fn check_run(text: &str, name: &str) {
     let summary = run_scene(scene.clone(), &opts).unwrap();
     let grid = scene.grid();
 
-    let snaps = parse_xmf(&out.join("fields.xmf"));
+    let double = scene.output.precision == tumble::scene::Precision::Double;
+    let snaps = parse_xmf(&out.join("fields.xmf"), if double { "8" } else { "4" });
     // Snapshots at 0, every, 2 every, ..., end.
     let every = scene.output.every.unwrap();
     let end = scene.numerics.end_time;
@@ -214,13 +216,31 @@ fn check_run(text: &str, name: &str) {
                 want_shape.push(3);
             }
             assert_eq!(shape, &want_shape, "{aname}");
-            let data: Vec<f64> = ds.read_raw().unwrap();
+            // Chunked and deflate-compressed; stored in the scene's precision: Double is the
+            // field bit for bit, Single the field rounded to the nearest f32.
+            assert!(ds.chunk().is_some(), "{file}:{dset} is not chunked");
+            assert!(
+                ds.filters()
+                    .iter()
+                    .any(|f| matches!(f, hdf5::filters::Filter::Deflate(_))),
+                "{file}:{dset} is not compressed"
+            );
+            assert_eq!(ds.dtype().unwrap().size(), if double { 8 } else { 4 });
+            let data: Vec<f64> = if double {
+                ds.read_raw().unwrap()
+            } else {
+                let v: Vec<f32> = ds.read_raw().unwrap();
+                v.into_iter().map(f64::from).collect()
+            };
             let want = expected(&sim, aname);
             assert_eq!(data.len(), want.len(), "{file}:{dset}");
-            let same = data
-                .iter()
-                .zip(&want)
-                .all(|(a, b)| a.to_bits() == b.to_bits());
+            let same = data.iter().zip(&want).all(|(a, b)| {
+                if double {
+                    a.to_bits() == b.to_bits()
+                } else {
+                    *a == *b as f32 as f64 && (a - b).abs() <= b.abs() * 2f64.powi(-24)
+                }
+            });
             assert!(same, "{file}:{dset} differs from the in-memory field");
         }
     }

@@ -37,9 +37,11 @@
 //! `KEND`. A checkpoint from another format or tumble version, a truncated or corrupt file
 //! (trailer or checksum) is refused with a [`CheckpointError`] naming the file.
 //!
-//! The file is written with [`atomic_write_with`] (temporary `.checkpoint.bin.tmp-*` in the
-//! same directory, fsync, rename), so a killed run leaves the previous checkpoint or the new
-//! one, never a torn file.
+//! A run writes `checkpoint_NNNNNN.bin` (named by step, [`file_name`]) with
+//! [`atomic_write_with`] (temporary `.checkpoint_NNNNNN.bin.tmp-*` in the same directory,
+//! fsync, rename), so a killed run leaves whole checkpoints only; once one is complete the
+//! oldest beyond `output.checkpoints_kept` are deleted ([`prune`], only files of that name).
+//! `--restart DIR` takes the latest ([`resolve`]).
 
 use crate::base::fields::{Fields, Sample, SimTime};
 use crate::bodies::{Body, ContactState, FreeMotion, Hydro, PreviousVelocity, RigidState};
@@ -55,8 +57,11 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// The checkpoint's file name in a run directory.
+/// The single checkpoint file of runs written by earlier tumble versions, which `--restart DIR`
+/// still finds (this version writes [`file_name`]).
 pub const FILE_NAME: &str = "checkpoint.bin";
+/// Name prefix of the numbered checkpoints a run keeps (`checkpoint_NNNNNN.bin`, the step).
+const PREFIX: &str = "checkpoint_";
 /// First bytes of every checkpoint.
 pub const MAGIC: [u8; 8] = *b"TUMBLECK";
 /// Last bytes of every complete checkpoint.
@@ -140,6 +145,98 @@ pub fn remove_temp_files(dir: &Path) -> io::Result<usize> {
         }
     }
     Ok(n)
+}
+
+/// The file name of the checkpoint at `step`: `checkpoint_NNNNNN.bin` (at least 6 digits).
+pub fn file_name(step: u64) -> String {
+    format!("{PREFIX}{step:06}.bin")
+}
+
+/// The step of a checkpoint file name tumble writes ([`file_name`]), `None` for any other.
+pub fn step_of(name: &str) -> Option<u64> {
+    let digits = name.strip_prefix(PREFIX)?.strip_suffix(".bin")?;
+    if digits.len() < 6 || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let step: u64 = digits.parse().ok()?;
+    (file_name(step) == name).then_some(step)
+}
+
+/// The numbered checkpoints in `dir` (files named as [`file_name`] makes them), by step,
+/// oldest first.
+pub fn list(dir: &Path) -> io::Result<Vec<(u64, PathBuf)>> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir)? {
+        let e = e?;
+        if let Some(step) = e.file_name().to_str().and_then(step_of)
+            && e.file_type()?.is_file()
+        {
+            v.push((step, e.path()));
+        }
+    }
+    v.sort();
+    Ok(v)
+}
+
+/// Delete the numbered checkpoints in `dir` but the `keep` latest (by step); returns those
+/// deleted. Only files named as [`file_name`] makes them are touched.
+pub fn prune(dir: &Path, keep: usize) -> io::Result<Vec<PathBuf>> {
+    let all = list(dir)?;
+    let n = all.len().saturating_sub(keep);
+    let mut gone = Vec::with_capacity(n);
+    for (_, p) in all.into_iter().take(n) {
+        std::fs::remove_file(&p)?;
+        gone.push(p);
+    }
+    Ok(gone)
+}
+
+/// Delete the numbered checkpoints in `dir` of steps after `step` (written by a run that a
+/// restart from `step` replaces); returns those deleted.
+pub fn remove_after(dir: &Path, step: u64) -> io::Result<Vec<PathBuf>> {
+    let mut gone = Vec::new();
+    for (s, p) in list(dir)? {
+        if s > step {
+            std::fs::remove_file(&p)?;
+            gone.push(p);
+        }
+    }
+    Ok(gone)
+}
+
+/// The checkpoint `--restart PATH` means: PATH itself if it is a file; if it is a directory,
+/// its latest complete checkpoint (the numbered one of the highest step that reads back
+/// whole, else a `checkpoint.bin` of older tumble versions).
+pub fn resolve(path: &Path) -> Result<PathBuf, CheckpointError> {
+    let err = |message: String| CheckpointError {
+        file: path.to_path_buf(),
+        message,
+    };
+    if !path.is_dir() {
+        return Ok(path.to_path_buf());
+    }
+    let all = list(path).map_err(|e| err(format!("cannot list the directory: {e}")))?;
+    let mut refused = Vec::new();
+    for (_, p) in all.into_iter().rev() {
+        match Checkpoint::load(&p) {
+            Ok(_) => return Ok(p),
+            Err(e) => refused.push(e.to_string()),
+        }
+    }
+    let legacy = path.join(FILE_NAME);
+    if legacy.is_file() {
+        return Ok(legacy);
+    }
+    Err(err(if refused.is_empty() {
+        "the directory holds no checkpoint (checkpoint_NNNNNN.bin); was the run written with \
+         output.checkpoint_every or --checkpoint-every, or stopped with Ctrl-C?"
+            .to_string()
+    } else {
+        format!(
+            "no checkpoint in the directory is usable: {}",
+            refused.join("; ")
+        )
+    }))
 }
 
 /// Where a run's outputs stood when its checkpoint was written.

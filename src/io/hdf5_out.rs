@@ -16,6 +16,7 @@
 use crate::base::grid::Grid;
 use crate::io::output::{VtkField, disk_full, temp_path};
 use crate::io::xdmf::dataset_shape;
+use crate::scene::format::Precision;
 use std::io;
 use std::path::Path;
 
@@ -68,21 +69,63 @@ fn scalar_f64(loc: &hdf5::Location, name: &str, v: f64) -> hdf5::Result<()> {
     loc.new_attr::<f64>().create(name)?.write_scalar(&v)
 }
 
-fn dataset(group: &hdf5::Group, name: &str, shape: &[usize], v: &[f64]) -> hdf5::Result<()> {
-    group
-        .new_dataset::<f64>()
-        .shape(shape)
-        .create(name)?
-        .write_raw(v)
+/// Bytes per chunk of a field dataset, about.
+const CHUNK_BYTES: usize = 1 << 20;
+
+/// The chunk shape of a field dataset of `shape` with `size`-byte values: whole planes of the
+/// slowest axis, as many as fit in about [`CHUNK_BYTES`] (at least one).
+fn chunk_shape(shape: &[usize], size: usize) -> Vec<usize> {
+    let plane: usize = shape[1..].iter().product::<usize>().max(1) * size;
+    let mut c = shape.to_vec();
+    c[0] = (CHUNK_BYTES / plane).clamp(1, shape[0].max(1));
+    c
 }
 
-/// Write one snapshot: `fields` (as for [`crate::io::output::write_vti`]) on `grid` at `time`.
+/// A field dataset `name` of `shape` holding `v`: chunked, shuffled and deflate-compressed
+/// (when the library has the deflate filter), as `T` (`f32` or `f64`).
+fn field_dataset<T: hdf5::H5Type>(
+    group: &hdf5::Group,
+    name: &str,
+    shape: &[usize],
+    v: &[T],
+) -> hdf5::Result<()> {
+    let b = group.new_dataset::<T>().shape(shape);
+    let b = if hdf5::filters::deflate_available() && shape.iter().all(|&n| n > 0) {
+        b.chunk(chunk_shape(shape, std::mem::size_of::<T>()))
+            .shuffle()
+            .deflate(4)
+    } else {
+        b
+    };
+    b.create(name)?.write_raw(v)
+}
+
+/// [`field_dataset`] of `v` in `precision`.
+fn dataset(
+    group: &hdf5::Group,
+    name: &str,
+    shape: &[usize],
+    v: &[f64],
+    precision: Precision,
+) -> hdf5::Result<()> {
+    match precision {
+        Precision::Double => field_dataset(group, name, shape, v),
+        Precision::Single => {
+            let s: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+            field_dataset(group, name, shape, &s)
+        }
+    }
+}
+
+/// Write one snapshot: `fields` (as for [`crate::io::output::write_vti`]) on `grid` at `time`,
+/// in `precision`, each dataset chunked and compressed.
 pub fn write_fields(
     path: &Path,
     grid: &Grid,
     time: f64,
     step: u64,
     fields: &[VtkField],
+    precision: Precision,
 ) -> io::Result<()> {
     let npts = grid.len();
     for f in fields {
@@ -107,7 +150,7 @@ pub fn write_fields(
             let nc = f.components.len();
             let shape = dataset_shape(grid, nc);
             if nc == 1 {
-                dataset(file, f.name, &shape, f.components[0])?;
+                dataset(file, f.name, &shape, f.components[0], precision)?;
             } else {
                 buf.clear();
                 buf.reserve(3 * npts);
@@ -116,7 +159,7 @@ pub fn write_fields(
                         buf.push(f.components.get(c).map_or(0.0, |v| v[p]));
                     }
                 }
-                dataset(file, f.name, &shape, &buf)?;
+                dataset(file, f.name, &shape, &buf, precision)?;
             }
         }
         Ok(())

@@ -12,11 +12,16 @@
 
 use std::fmt::Write as _;
 use std::fs::{self, File};
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::base::grid::Grid;
+use crate::scene::format::Precision;
+use flate2::Compression;
+use flate2::read::ZlibDecoder;
+use flate2::write::ZlibEncoder;
+use rayon::prelude::*;
 
 /// Buffer size for streamed output files.
 const BUF_BYTES: usize = 1 << 20;
@@ -176,85 +181,16 @@ pub struct VtkField<'a> {
 /// Fails with `InvalidInput` if a field has 0 or more than 3 components or a component's
 /// length is not `grid.len()`.
 pub fn write_vti(path: &Path, grid: &Grid, time: f64, fields: &[VtkField]) -> io::Result<()> {
+    check_fields(grid, fields)?;
     let npts = grid.len();
-    for f in fields {
-        let nc = f.components.len();
-        if !(1..=3).contains(&nc) {
-            return Err(invalid_input(format!(
-                "field {:?} has {nc} components (1, 2 or 3 allowed)",
-                f.name
-            )));
-        }
-        for (c, comp) in f.components.iter().enumerate() {
-            if comp.len() != npts {
-                return Err(invalid_input(format!(
-                    "field {:?} component {c} has {} values, grid has {npts} nodes",
-                    f.name,
-                    comp.len()
-                )));
-            }
-        }
-    }
     let out_comps = |f: &VtkField| if f.components.len() == 1 { 1 } else { 3 };
-
-    let [nx, ny, nz] = grid.n;
-    let three_d = grid.dim == 3;
-    let ez = if three_d { nz.saturating_sub(1) } else { 0 };
-    let extent = format!(
-        "0 {} 0 {} 0 {}",
-        nx.saturating_sub(1),
-        ny.saturating_sub(1),
-        ez
-    );
-    let oz = if three_d { grid.origin[2] } else { 0.0 };
-    let h = fmt_f64(grid.h);
-
-    let mut head = String::new();
-    head.push_str("<?xml version=\"1.0\"?>\n");
-    head.push_str(
-        "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" \
-         header_type=\"UInt64\">\n",
-    );
-    let _ = writeln!(
-        head,
-        "  <ImageData WholeExtent=\"{extent}\" Origin=\"{} {} {}\" Spacing=\"{h} {h} {h}\">",
-        fmt_f64(grid.origin[0]),
-        fmt_f64(grid.origin[1]),
-        fmt_f64(oz)
-    );
-    head.push_str("    <FieldData>\n");
-    let _ = writeln!(
-        head,
-        "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" \
-         format=\"ascii\">{}</DataArray>",
-        fmt_f64(time)
-    );
-    head.push_str("    </FieldData>\n");
-    let _ = writeln!(head, "    <Piece Extent=\"{extent}\">");
-    head.push_str("      <PointData");
-    if let Some(f) = fields.iter().find(|f| out_comps(f) == 1) {
-        let _ = write!(head, " Scalars=\"{}\"", xml_escape(f.name));
-    }
-    if let Some(f) = fields.iter().find(|f| out_comps(f) == 3) {
-        let _ = write!(head, " Vectors=\"{}\"", xml_escape(f.name));
-    }
-    head.push_str(">\n");
+    let mut offsets = Vec::with_capacity(fields.len());
     let mut offset: u64 = 0;
     for f in fields {
-        let nc = out_comps(f);
-        let _ = writeln!(
-            head,
-            "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{nc}\" \
-             format=\"appended\" offset=\"{offset}\"/>",
-            xml_escape(f.name)
-        );
-        offset += 8 + (npts * nc * 8) as u64;
+        offsets.push(offset);
+        offset += 8 + (npts * out_comps(f) * 8) as u64;
     }
-    head.push_str("      </PointData>\n");
-    head.push_str("      <CellData>\n      </CellData>\n");
-    head.push_str("    </Piece>\n");
-    head.push_str("  </ImageData>\n");
-    head.push_str("  <AppendedData encoding=\"raw\">\n   _");
+    let head = vti_head(grid, time, fields, "Float64", &offsets, false);
 
     atomic_write_with(path, |w| {
         w.write_all(head.as_bytes())?;
@@ -289,6 +225,192 @@ pub fn write_vti(path: &Path, grid: &Grid, time: f64, fields: &[VtkField]) -> io
         }
         w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
     })
+}
+
+/// Uncompressed bytes per zlib block of a compressed `.vti` array.
+const ZLIB_BLOCK: usize = 1 << 18;
+
+/// The values of `f` as the bytes of its appended array (interleaved per point, 2D vectors
+/// padded with z = 0), little-endian, in `precision`.
+fn field_bytes(f: &VtkField, npts: usize, precision: Precision) -> Vec<u8> {
+    let nc = if f.components.len() == 1 { 1 } else { 3 };
+    let mut out = Vec::with_capacity(npts * nc * precision.bytes());
+    let mut push = |x: f64| match precision {
+        Precision::Single => out.extend_from_slice(&(x as f32).to_le_bytes()),
+        Precision::Double => out.extend_from_slice(&x.to_le_bytes()),
+    };
+    for p in 0..npts {
+        for c in 0..nc {
+            push(f.components.get(c).map_or(0.0, |v| v[p]));
+        }
+    }
+    out
+}
+
+/// `raw` as a VTK zlib-compressed array: the `UInt64` header `[nblocks, blocksize,
+/// last_blocksize, compressed sizes...]` followed by the zlib streams of the blocks
+/// (`last_blocksize` is the size of a partial last block, 0 when every block is full).
+fn zlib_array(raw: &[u8]) -> io::Result<Vec<u8>> {
+    let blocks: Vec<Vec<u8>> = raw
+        .par_chunks(ZLIB_BLOCK)
+        .map(|b| {
+            let mut e = ZlibEncoder::new(Vec::with_capacity(b.len() / 2), Compression::new(6));
+            e.write_all(b)?;
+            e.finish()
+        })
+        .collect::<io::Result<_>>()?;
+    let mut out =
+        Vec::with_capacity(8 * (3 + blocks.len()) + blocks.iter().map(Vec::len).sum::<usize>());
+    for h in [
+        blocks.len() as u64,
+        ZLIB_BLOCK as u64,
+        (raw.len() % ZLIB_BLOCK) as u64,
+    ] {
+        out.extend_from_slice(&h.to_le_bytes());
+    }
+    for b in &blocks {
+        out.extend_from_slice(&(b.len() as u64).to_le_bytes());
+    }
+    for b in &blocks {
+        out.extend_from_slice(b);
+    }
+    Ok(out)
+}
+
+/// Writes a VTK XML ImageData file (`.vti`) like [`write_vti`], with the arrays in
+/// `precision` (`Float32` or `Float64`) and the appended data zlib-compressed in the format
+/// of VTK's `vtkZLibDataCompressor` (what ParaView reads). The compression runs in parallel
+/// over blocks; the arrays are compressed in memory before the file is written atomically.
+pub fn write_vti_compressed(
+    path: &Path,
+    grid: &Grid,
+    time: f64,
+    fields: &[VtkField],
+    precision: Precision,
+) -> io::Result<()> {
+    check_fields(grid, fields)?;
+    let npts = grid.len();
+    let arrays: Vec<Vec<u8>> = fields
+        .iter()
+        .map(|f| zlib_array(&field_bytes(f, npts, precision)))
+        .collect::<io::Result<_>>()?;
+    let ty = match precision {
+        Precision::Single => "Float32",
+        Precision::Double => "Float64",
+    };
+    let mut offsets = Vec::with_capacity(arrays.len());
+    let mut offset = 0u64;
+    for a in &arrays {
+        offsets.push(offset);
+        offset += a.len() as u64;
+    }
+    let head = vti_head(grid, time, fields, ty, &offsets, true);
+    atomic_write_with(path, |w| {
+        w.write_all(head.as_bytes())?;
+        for a in &arrays {
+            w.write_all(a)?;
+        }
+        w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
+    })
+}
+
+/// Fails with `InvalidInput` if a field has 0 or more than 3 components or a component's
+/// length is not `grid.len()`.
+fn check_fields(grid: &Grid, fields: &[VtkField]) -> io::Result<()> {
+    let npts = grid.len();
+    for f in fields {
+        let nc = f.components.len();
+        if !(1..=3).contains(&nc) {
+            return Err(invalid_input(format!(
+                "field {:?} has {nc} components (1, 2 or 3 allowed)",
+                f.name
+            )));
+        }
+        for (c, comp) in f.components.iter().enumerate() {
+            if comp.len() != npts {
+                return Err(invalid_input(format!(
+                    "field {:?} component {c} has {} values, grid has {npts} nodes",
+                    f.name,
+                    comp.len()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The XML of a `.vti` file up to the `_` that starts the appended data: arrays of type `ty`
+/// at `offsets`, with the zlib compressor named when `compressed`.
+fn vti_head(
+    grid: &Grid,
+    time: f64,
+    fields: &[VtkField],
+    ty: &str,
+    offsets: &[u64],
+    compressed: bool,
+) -> String {
+    let out_comps = |f: &VtkField| if f.components.len() == 1 { 1 } else { 3 };
+    let [nx, ny, nz] = grid.n;
+    let three_d = grid.dim == 3;
+    let ez = if three_d { nz.saturating_sub(1) } else { 0 };
+    let extent = format!(
+        "0 {} 0 {} 0 {}",
+        nx.saturating_sub(1),
+        ny.saturating_sub(1),
+        ez
+    );
+    let oz = if three_d { grid.origin[2] } else { 0.0 };
+    let h = fmt_f64(grid.h);
+
+    let mut head = String::new();
+    head.push_str("<?xml version=\"1.0\"?>\n");
+    head.push_str(
+        "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" \
+         header_type=\"UInt64\"",
+    );
+    if compressed {
+        head.push_str(" compressor=\"vtkZLibDataCompressor\"");
+    }
+    head.push_str(">\n");
+    let _ = writeln!(
+        head,
+        "  <ImageData WholeExtent=\"{extent}\" Origin=\"{} {} {}\" Spacing=\"{h} {h} {h}\">",
+        fmt_f64(grid.origin[0]),
+        fmt_f64(grid.origin[1]),
+        fmt_f64(oz)
+    );
+    head.push_str("    <FieldData>\n");
+    let _ = writeln!(
+        head,
+        "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" \
+         format=\"ascii\">{}</DataArray>",
+        fmt_f64(time)
+    );
+    head.push_str("    </FieldData>\n");
+    let _ = writeln!(head, "    <Piece Extent=\"{extent}\">");
+    head.push_str("      <PointData");
+    if let Some(f) = fields.iter().find(|f| out_comps(f) == 1) {
+        let _ = write!(head, " Scalars=\"{}\"", xml_escape(f.name));
+    }
+    if let Some(f) = fields.iter().find(|f| out_comps(f) == 3) {
+        let _ = write!(head, " Vectors=\"{}\"", xml_escape(f.name));
+    }
+    head.push_str(">\n");
+    for (f, offset) in fields.iter().zip(offsets) {
+        let nc = out_comps(f);
+        let _ = writeln!(
+            head,
+            "        <DataArray type=\"{ty}\" Name=\"{}\" NumberOfComponents=\"{nc}\" \
+             format=\"appended\" offset=\"{offset}\"/>",
+            xml_escape(f.name)
+        );
+    }
+    head.push_str("      </PointData>\n");
+    head.push_str("      <CellData>\n      </CellData>\n");
+    head.push_str("    </Piece>\n");
+    head.push_str("  </ImageData>\n");
+    head.push_str("  <AppendedData encoding=\"raw\">\n   _");
+    head
 }
 
 /// What [`read_vti`] found in a `.vti` file.
@@ -360,8 +482,9 @@ fn parse_nums<T: std::str::FromStr, const N: usize>(s: &str, what: &str) -> io::
         .map_err(|_| invalid_data(format!("{what} needs {N} numbers: {s:?}")))
 }
 
-/// Reads a `.vti` file in exactly the format [`write_vti`] writes (Float64 arrays, raw
-/// appended data with `UInt64` little-endian headers, `TIME` as ascii field data).
+/// Reads a `.vti` file in exactly the formats [`write_vti`] and [`write_vti_compressed`]
+/// write (Float32 or Float64 arrays, raw appended data with `UInt64` little-endian headers,
+/// uncompressed or zlib-compressed, `TIME` as ascii field data); values come back as `f64`.
 pub fn read_vti(path: &Path) -> io::Result<VtiData> {
     let bytes = fs::read(path)?;
     let marker = b"<AppendedData";
@@ -394,8 +517,9 @@ pub fn read_vti(path: &Path) -> io::Result<VtiData> {
     let mut origin = None;
     let mut spacing = None;
     let mut time = None;
-    // (name, components, offset)
-    let mut specs: Vec<(String, usize, usize)> = Vec::new();
+    let mut compressed = false;
+    // (name, components, offset, bytes per value)
+    let mut specs: Vec<(String, usize, usize, usize)> = Vec::new();
     let mut in_point = false;
     let mut in_field = false;
 
@@ -432,6 +556,11 @@ pub fn read_vti(path: &Path) -> io::Result<VtiData> {
                 if attr(&attrs, "header_type") != Some("UInt64") {
                     return Err(invalid_data("header_type is not UInt64"));
                 }
+                compressed = match attr(&attrs, "compressor") {
+                    None => false,
+                    Some("vtkZLibDataCompressor") => true,
+                    Some(c) => return Err(invalid_data(format!("unknown compressor {c:?}"))),
+                };
             }
             "ImageData" => {
                 whole_extent = Some(parse_nums::<usize, 6>(
@@ -451,9 +580,15 @@ pub fn read_vti(path: &Path) -> io::Result<VtiData> {
             "FieldData" => in_field = !self_closing,
             "DataArray" if in_point => {
                 let arr_name = need_attr(&attrs, "Name", &name)?.to_string();
-                if need_attr(&attrs, "type", &name)? != "Float64" {
-                    return Err(invalid_data(format!("array {arr_name:?} is not Float64")));
-                }
+                let size = match need_attr(&attrs, "type", &name)? {
+                    "Float64" => 8,
+                    "Float32" => 4,
+                    t => {
+                        return Err(invalid_data(format!(
+                            "array {arr_name:?} is {t}, not Float32 or Float64"
+                        )));
+                    }
+                };
                 if need_attr(&attrs, "format", &name)? != "appended" {
                     return Err(invalid_data(format!("array {arr_name:?} is not appended")));
                 }
@@ -468,7 +603,7 @@ pub fn read_vti(path: &Path) -> io::Result<VtiData> {
                     .trim()
                     .parse::<usize>()
                     .map_err(|_| invalid_data("bad offset"))?;
-                specs.push((arr_name, nc, off));
+                specs.push((arr_name, nc, off, size));
             }
             "DataArray" if in_field && attr(&attrs, "Name") == Some("TIME") => {
                 if self_closing {
@@ -505,24 +640,34 @@ pub fn read_vti(path: &Path) -> io::Result<VtiData> {
     }
 
     let mut arrays = Vec::with_capacity(specs.len());
-    for (name, nc, off) in specs {
-        let head = data
-            .get(off..off + 8)
-            .ok_or_else(|| invalid_data(format!("array {name:?}: offset past end")))?;
-        let nbytes = u64::from_le_bytes(head.try_into().unwrap()) as usize;
-        if nbytes != npts * nc * 8 {
-            return Err(invalid_data(format!(
-                "array {name:?}: {nbytes} bytes, expected {}",
-                npts * nc * 8
-            )));
-        }
-        let raw = data
-            .get(off + 8..off + 8 + nbytes)
-            .ok_or_else(|| invalid_data(format!("array {name:?}: truncated")))?;
-        let values = raw
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-            .collect();
+    for (name, nc, off, size) in specs {
+        let expected = npts * nc * size;
+        let raw = if compressed {
+            inflate_array(data, off, expected)
+                .map_err(|e| invalid_data(format!("array {name:?}: {e}")))?
+        } else {
+            let head = data
+                .get(off..off + 8)
+                .ok_or_else(|| invalid_data(format!("array {name:?}: offset past end")))?;
+            let nbytes = u64::from_le_bytes(head.try_into().unwrap()) as usize;
+            if nbytes != expected {
+                return Err(invalid_data(format!(
+                    "array {name:?}: {nbytes} bytes, expected {expected}"
+                )));
+            }
+            data.get(off + 8..off + 8 + nbytes)
+                .ok_or_else(|| invalid_data(format!("array {name:?}: truncated")))?
+                .to_vec()
+        };
+        let values = if size == 8 {
+            raw.chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+                .collect()
+        } else {
+            raw.chunks_exact(4)
+                .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64)
+                .collect()
+        };
         arrays.push((name, nc, values));
     }
 
@@ -533,6 +678,51 @@ pub fn read_vti(path: &Path) -> io::Result<VtiData> {
         time,
         arrays,
     })
+}
+
+/// The `expected` bytes of the zlib-compressed array at `off` in the appended `data` (see
+/// [`zlib_array`] for the layout).
+fn inflate_array(data: &[u8], off: usize, expected: usize) -> Result<Vec<u8>, String> {
+    let word = |i: usize| -> Result<usize, String> {
+        let at = off + 8 * i;
+        data.get(at..at + 8)
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap()) as usize)
+            .ok_or_else(|| "compression header past the end".to_string())
+    };
+    let (nblocks, bs, last) = (word(0)?, word(1)?, word(2)?);
+    let total = match (nblocks, last) {
+        (0, _) => 0,
+        (n, 0) => n * bs,
+        (n, l) => (n - 1) * bs + l,
+    };
+    if total != expected {
+        return Err(format!("{total} bytes, expected {expected}"));
+    }
+    let mut pos = off + 8 * (3 + nblocks);
+    let mut out = Vec::with_capacity(expected);
+    for k in 0..nblocks {
+        let len = word(3 + k)?;
+        let block = data
+            .get(pos..pos + len)
+            .ok_or_else(|| "truncated compressed data".to_string())?;
+        let before = out.len();
+        ZlibDecoder::new(block)
+            .read_to_end(&mut out)
+            .map_err(|e| format!("bad zlib block {k}: {e}"))?;
+        let want = if k + 1 == nblocks && last != 0 {
+            last
+        } else {
+            bs
+        };
+        if out.len() - before != want {
+            return Err(format!(
+                "block {k} inflates to {} bytes, expected {want}",
+                out.len() - before
+            ));
+        }
+        pos += len;
+    }
+    Ok(out)
 }
 
 /// A ParaView `.pvd` collection indexing a time series of snapshot files.

@@ -14,7 +14,7 @@
 
 use crate::bodies::{Body, BodySurface, Hydro, RigidState};
 use crate::io::checkpoint::RunProgress;
-use crate::io::output::{PvdSeries, VtkField, write_vti};
+use crate::io::output::{PvdSeries, VtkField, write_vti_compressed};
 use crate::io::surfaces::{SurfacePart, SurfaceSeries};
 use crate::scene::{FieldName, OutputFormat};
 use crate::sim::engine::Simulation;
@@ -221,8 +221,15 @@ impl Snapshots {
         let mut written = Vec::new();
         if let Some(pvd) = self.pvd.as_mut() {
             let file = format!("fields_{:06}.vti", self.count);
-            write_vti(&self.dir.join(&file), sim.grid(), sim.time(), vtk)
-                .with_context(|| format!("cannot write {file}"))?;
+            let precision = sim.scene().output.precision;
+            write_vti_compressed(
+                &self.dir.join(&file),
+                sim.grid(),
+                sim.time(),
+                vtk,
+                precision,
+            )
+            .with_context(|| format!("cannot write {file}"))?;
             pvd.push(sim.time(), &file)
                 .context("cannot write fields.pvd")?;
             written.push(file);
@@ -363,7 +370,8 @@ impl Hdf5Outputs {
             .any(|b| matches!(b.kind, BodyKind::Dynamic))
             .then(ContactSeries::default);
         Hdf5Outputs {
-            xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), sim.grid()),
+            xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), sim.grid())
+                .with_precision(sim.scene().output.precision),
             series: Series {
                 global,
                 bodies,
@@ -401,7 +409,8 @@ impl Hdf5Outputs {
             });
         }
         h.xmf =
-            crate::io::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries);
+            crate::io::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries)
+                .with_precision(sim.scene().output.precision);
         let path = dir.join("series.h5");
         let cut = crate::io::hdf5_out::check_series(&path, &h.series, step0 as usize + 1, t0)
             .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?
@@ -480,6 +489,7 @@ impl Hdf5Outputs {
             sim.time(),
             sim.steps(),
             fields,
+            sim.scene().output.precision,
         )
         .with_context(|| format!("cannot write {file}"))?;
         self.xmf

@@ -58,15 +58,24 @@ pub struct XdmfSeries {
     path: PathBuf,
     grid: Grid,
     entries: Vec<XdmfEntry>,
+    /// Bytes per value of the snapshots' datasets (4 or 8).
+    precision: usize,
 }
 
 impl XdmfSeries {
+    /// The same series with datasets of `precision` (Double unless set).
+    pub fn with_precision(mut self, precision: crate::scene::format::Precision) -> Self {
+        self.precision = precision.bytes();
+        self
+    }
+
     /// A series of snapshots on `grid`, indexed in `path` (nothing written until a push).
     pub fn new(path: impl Into<PathBuf>, grid: &Grid) -> Self {
         XdmfSeries {
             path: path.into(),
             grid: grid.clone(),
             entries: Vec::new(),
+            precision: 8,
         }
     }
 
@@ -77,6 +86,7 @@ impl XdmfSeries {
             path: path.into(),
             grid: grid.clone(),
             entries,
+            precision: 8,
         }
     }
 
@@ -178,8 +188,8 @@ impl XdmfSeries {
                 let _ = writeln!(
                     s,
                     "          <DataItem Dimensions=\"{shape}\" NumberType=\"Float\" \
-                     Precision=\"8\" Format=\"HDF\">{}:/{}</DataItem>",
-                    e.file, a.name
+                     Precision=\"{}\" Format=\"HDF\">{}:/{}</DataItem>",
+                    self.precision, e.file, a.name
                 );
                 s.push_str("        </Attribute>\n");
             }

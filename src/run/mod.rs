@@ -115,8 +115,8 @@ struct Run {
     next_out: Option<f64>,
     /// The next checkpoint time, when checkpoints are periodic.
     next_ckpt: Option<f64>,
-    /// (t, step) of the checkpoint in the run directory, if this run wrote or started from one.
-    last_ckpt: Option<(f64, u64)>,
+    /// (t, step, file) of the latest checkpoint, if this run wrote or started from one.
+    last_ckpt: Option<(f64, u64, PathBuf)>,
 }
 
 /// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
@@ -185,7 +185,8 @@ fn start_run(scene: ValidScene, opts: &RunOptions, dir: PathBuf) -> anyhow::Resu
     drive(run, opts, wall0)
 }
 
-/// Continue the run of `checkpoint` (a file in its run directory) to the scene's end time (or
+/// Continue the run of `checkpoint` (a file in its run directory, or the run directory: then
+/// its latest complete checkpoint, see [`checkpoint::resolve`]) to the scene's end time (or
 /// `opts.until`), appending to the run directory's outputs and its log. `scene`, if given
 /// (with its file for messages), must be the checkpoint's; so must the run directory's
 /// `scene.ron`. First the outputs are cut back to the checkpoint: the CSV time series to its
@@ -197,6 +198,7 @@ pub fn restart_run(
     opts: &RunOptions,
 ) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
+    let checkpoint = &checkpoint::resolve(checkpoint)?;
     let ck = Checkpoint::load(checkpoint)?;
     let run_scene = ck.scene()?;
     if let Some((file, given)) = &scene
@@ -291,6 +293,9 @@ fn continue_run(
     ];
     checkpoint::remove_temp_files(dir)
         .with_context(|| format!("cannot clean up {}", dir.display()))?;
+    // Checkpoints after this one belong to the run this restart replaces.
+    checkpoint::remove_after(dir, ck.time.step)
+        .with_context(|| format!("cannot remove later checkpoints in {}", dir.display()))?;
     for (name, len) in csvs {
         let Some(len) = len else { continue };
         std::fs::OpenOptions::new()
@@ -326,7 +331,7 @@ fn continue_run(
         snaps,
         next_out: p.next_out,
         next_ckpt,
-        last_ckpt: Some((ck.time.t, ck.time.step)),
+        last_ckpt: Some((ck.time.t, ck.time.step, ck.file.clone())),
     };
     drive(run, opts, wall0)
 }
@@ -374,12 +379,20 @@ impl Run {
                 None => None,
             },
         };
-        let path = self.dir.join(checkpoint::FILE_NAME);
+        let (t, step) = (self.sim.time(), self.sim.steps());
+        let path = self.dir.join(checkpoint::file_name(step));
         checkpoint::save(&path, &mut self.sim, &progress)
             .with_context(|| format!("cannot write {}", path.display()))?;
-        let (t, step) = (self.sim.time(), self.sim.steps());
-        self.last_ckpt = Some((t, step));
-        tracing::info!("checkpoint at step {step}, t = {t}");
+        tracing::info!("checkpoint at step {step}, t = {t}: {}", path.display());
+        self.last_ckpt = Some((t, step, path));
+        // Only once the new one is complete are the oldest beyond output.checkpoints_kept
+        // deleted.
+        let kept = self.sim.scene().output.checkpoints_kept.max(1);
+        for p in checkpoint::prune(&self.dir, kept)
+            .with_context(|| format!("cannot remove old checkpoints in {}", self.dir.display()))?
+        {
+            tracing::info!("removed the old checkpoint {}", p.display());
+        }
         Ok(())
     }
 
@@ -399,7 +412,7 @@ impl Run {
             return Err(Interrupted {
                 step: self.sim.steps(),
                 t,
-                checkpoint: self.dir.join(checkpoint::FILE_NAME),
+                checkpoint: self.dir.join(checkpoint::file_name(self.sim.steps())),
             }
             .into());
         }
@@ -408,9 +421,8 @@ impl Run {
 
     /// The message of a failed step, naming the last good checkpoint if there is one.
     fn failed(&self, e: anyhow::Error) -> anyhow::Error {
-        match self.last_ckpt {
-            Some((t, step)) => {
-                let path = self.dir.join(checkpoint::FILE_NAME);
+        match &self.last_ckpt {
+            Some((t, step, path)) => {
                 anyhow::anyhow!(
                     "{e:#}; the last good checkpoint is {} (step {step}, t = {t})",
                     path.display()
@@ -505,7 +517,10 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
         }
         // A final checkpoint, from which the run can be continued (`--restart --until`).
         if run.sim.scene().output.checkpoint_every.is_some()
-            && run.last_ckpt.is_none_or(|(_, s)| s != run.sim.steps())
+            && run
+                .last_ckpt
+                .as_ref()
+                .is_none_or(|(_, s, _)| *s != run.sim.steps())
         {
             run.checkpoint()?;
         }

@@ -574,6 +574,12 @@ impl Output {
         {
             return fail(&["checkpoint_every"], format!("must be positive, got {e}"));
         }
+        if self.checkpoints_kept == 0 {
+            return fail(
+                &["checkpoints_kept"],
+                "must be at least 1 (the checkpoint a restart continues from)",
+            );
+        }
         if let Some(u) = &self.units {
             for (key, name) in [("length", &u.length), ("time", &u.time), ("mass", &u.mass)] {
                 if let Some(n) = name

@@ -350,11 +350,21 @@ pub struct Output {
     /// `Hdf5` (`fields_NNNNNN.h5` + `fields.xmf`, and the body and contact series in
     /// `series.h5`; needs a build with `--features hdf5`). At least one. Default: `[Vtk]`.
     pub formats: Vec<OutputFormat>,
-    /// Simulated time between checkpoints (`checkpoint.bin` in the run directory, replaced
-    /// each time; `tumble run --restart` continues from it), time units; `tumble run
+    /// Simulated time between checkpoints (`checkpoint_NNNNNN.bin` in the run directory,
+    /// named by step, the latest `checkpoints_kept` kept; `tumble run --restart DIR`
+    /// continues from the latest), time units; `tumble run
     /// --checkpoint-every` overrides it. `None` writes a checkpoint only when the run is
     /// interrupted (Ctrl-C, SIGTERM). Default: None.
     pub checkpoint_every: Option<f64>,
+    /// How many checkpoints are kept in the run directory (`checkpoint_NNNNNN.bin`, named by
+    /// step; older ones that tumble wrote are deleted once a newer one is complete), ≥ 1.
+    /// Default: 2.
+    pub checkpoints_kept: usize,
+    /// Floating-point precision of the field snapshots' arrays (VTK and HDF5): `Single`
+    /// (32-bit, about 7 significant digits, half the size) or `Double` (64-bit, the values
+    /// exactly as computed). Checkpoints and the CSV time series are always exact. Default:
+    /// Single.
+    pub precision: Precision,
     /// Names of the scene's units, a note for the plots' axis labels only (no number depends
     /// on it): `units: (length: "cm", time: "s", mass: "g")` labels the axes "t [s]",
     /// "height [cm]", "velocity [cm/s]". Default: none (the labels say "(scene units)").
@@ -373,6 +383,26 @@ pub struct Units {
     pub time: Option<String>,
     /// Name of the mass unit (e.g. "kg", "g"). Default: none.
     pub mass: Option<String>,
+}
+
+/// Floating-point precision of the arrays in field snapshots (`output.precision`).
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Precision {
+    /// 32-bit floats (`Float32`).
+    #[default]
+    Single,
+    /// 64-bit floats (`Float64`).
+    Double,
+}
+
+impl Precision {
+    /// Bytes per value: 4 or 8.
+    pub fn bytes(self) -> usize {
+        match self {
+            Precision::Single => 4,
+            Precision::Double => 8,
+        }
+    }
 }
 
 /// A file format for field snapshots.
@@ -400,6 +430,8 @@ impl Default for Output {
             dir: None,
             formats: vec![OutputFormat::Vtk],
             checkpoint_every: None,
+            checkpoints_kept: 2,
+            precision: Precision::Single,
             units: None,
         }
     }
