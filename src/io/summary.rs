@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::base::params::TimeStep;
-use crate::scene::{BodyKind, FieldName, OutputFormat, ValidScene};
+use crate::scene::{BodyKind, FieldName, OutputFormat, Precision, ValidScene};
 
 /// Bytes per grid cell a 3D run holds (fields, particles, FFT scratch), measured by `tumble
 /// bench` on `taylor-green-3d` at 128^3 (130 B per cell); 2D runs hold about half as many
@@ -195,18 +195,42 @@ pub fn describe(scene: &ValidScene) -> String {
             OutputFormat::Hdf5 => "HDF5 + XDMF (fields.xmf)",
         })
         .collect();
-    let _ = writeln!(
-        s,
-        "  output: {} snapshots ({}) of {} in {}, about {} each",
-        snapshots,
-        o.every
-            .map_or("first and last".to_string(), |e| format!("every {e}")),
-        fields.join(", "),
-        formats.join(" and "),
-        human_bytes(8.0 * values as f64)
-    );
-    if let Some(c) = o.checkpoint_every {
-        let _ = writeln!(s, "  checkpoints every {c}");
+    let (bytes, precision) = match o.precision {
+        Precision::Single => (4.0, "single"),
+        Precision::Double => (8.0, "double"),
+    };
+    if fields.is_empty() {
+        let _ = writeln!(s, "  output: no field snapshots");
+    } else {
+        let _ = writeln!(
+            s,
+            "  output: {} snapshots ({}) of {} in {}, {precision} precision, at most {} each \
+             before compression",
+            snapshots,
+            o.every
+                .map_or("first and last".to_string(), |e| format!("every {e}")),
+            fields.join(", "),
+            formats.join(" and "),
+            human_bytes(bytes * values as f64)
+        );
+    }
+    if !scene.bodies.is_empty() {
+        let _ = writeln!(s, "  body surfaces: bodies.pvd, with every snapshot");
+    }
+    match o.checkpoint_every {
+        Some(c) => {
+            let _ = writeln!(
+                s,
+                "  checkpoints every {c}, the last {} kept",
+                o.checkpoints_kept
+            );
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "  checkpoints: only if interrupted (Ctrl-C); --checkpoint-every T for more"
+            );
+        }
     }
     let warnings = scene.warnings();
     if warnings.is_empty() {
