@@ -4,7 +4,6 @@
 
 use std::fs;
 use std::io::Read;
-use std::path::{Path, PathBuf};
 
 use flate2::read::ZlibDecoder;
 use tumble::base::grid::Grid;
@@ -12,26 +11,12 @@ use tumble::io::output::{VtkField, read_vti, write_vti_compressed};
 use tumble::scene::Scene;
 use tumble::scene::format::Precision;
 
-/// A fresh scratch directory unique to this process and test; removed on drop.
-struct Scratch(PathBuf);
+mod common;
+use common::Scratch;
 
-impl Scratch {
-    fn new(test: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("tumble-compressed-{}-{}", std::process::id(), test));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
+/// This file's scratch directories.
+fn scratch(test: &str) -> Scratch {
+    Scratch::new("compressed", test)
 }
 
 fn field(grid: &Grid, f: impl Fn([usize; 3]) -> f64) -> Vec<f64> {
@@ -70,7 +55,7 @@ fn test_fields(g: &Grid) -> [Vec<f64>; 4] {
 
 #[test]
 fn single_precision_reads_back_within_f32_rounding() {
-    let s = Scratch::new("single");
+    let s = scratch("single");
     let g = grid();
     let [p, ux, uy, uz] = test_fields(&g);
     let path = s.path().join("f.vti");
@@ -125,7 +110,7 @@ fn single_precision_reads_back_within_f32_rounding() {
 
 #[test]
 fn double_precision_reads_back_exactly_and_2d_vectors_get_z_zero() {
-    let s = Scratch::new("double");
+    let s = scratch("double");
     let g = Grid::new([300, 200, 1], 0.5, [1.0, -2.0, 0.0]);
     let a = field(&g, |[i, j, _]| {
         (i as f64 + 0.1) * (j as f64 + 1.0 / 3.0) - 1e-300
@@ -165,7 +150,7 @@ fn double_precision_reads_back_exactly_and_2d_vectors_get_z_zero() {
 /// `[nblocks, blocksize, last_blocksize, csize_0 .. csize_{n-1}]`, then the zlib blocks.
 #[test]
 fn appended_data_has_the_vtk_zlib_layout() {
-    let s = Scratch::new("layout");
+    let s = scratch("layout");
     let g = grid();
     let [p, ..] = test_fields(&g);
     let path = s.path().join("f.vti");
@@ -214,7 +199,7 @@ fn appended_data_has_the_vtk_zlib_layout() {
 
 #[test]
 fn constant_fields_compress_and_damage_is_an_error() {
-    let s = Scratch::new("damage");
+    let s = scratch("damage");
     let g = grid();
     let c = vec![0.25; g.len()];
     let path = s.path().join("f.vti");

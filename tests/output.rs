@@ -2,7 +2,7 @@
 
 use std::fs;
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use tumble::base::grid::Grid;
 use tumble::io::output::{
@@ -10,26 +10,12 @@ use tumble::io::output::{
     write_vti,
 };
 
-/// A fresh, empty scratch directory unique to this process and test; removed on drop.
-struct Scratch(PathBuf);
+mod common;
+use common::Scratch;
 
-impl Scratch {
-    fn new(test: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("tumble-output-{}-{}", std::process::id(), test));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
+/// This file's scratch directories.
+fn scratch(test: &str) -> Scratch {
+    Scratch::new("output", test)
 }
 
 /// Names of the files in `dir` that look like leftover temporaries.
@@ -55,7 +41,7 @@ fn field(grid: &Grid, f: impl Fn([usize; 3]) -> f64) -> Vec<f64> {
 
 #[test]
 fn vti_3d_round_trip() {
-    let s = Scratch::new("vti3d");
+    let s = scratch("vti3d");
     let grid = Grid::new([5, 4, 3], 0.125, [-1.5, 0.25, 3.0]);
     // Values that do not survive a decimal text round trip unless written exactly.
     let p = field(&grid, |[i, j, k]| {
@@ -129,7 +115,7 @@ fn vti_3d_round_trip() {
 
 #[test]
 fn vti_2d_vector_padded_with_zero_z() {
-    let s = Scratch::new("vti2d");
+    let s = scratch("vti2d");
     let grid = Grid::new([6, 7, 1], 0.5, [1.0, -2.0, 99.0]);
     let ux = field(&grid, |[i, j, _]| i as f64 - 0.7 * j as f64);
     let uy = field(&grid, |[i, j, _]| 1.0 / (1.0 + i as f64 + j as f64));
@@ -172,7 +158,7 @@ fn vti_2d_vector_padded_with_zero_z() {
 
 #[test]
 fn vti_rejects_bad_fields() {
-    let s = Scratch::new("vtibad");
+    let s = scratch("vtibad");
     let grid = Grid::new([3, 3, 1], 1.0, [0.0; 3]);
     let short = vec![0.0; 8];
     let path = s.path().join("bad.vti");
@@ -204,7 +190,7 @@ fn vti_rejects_bad_fields() {
 
 #[test]
 fn pvd_series_lists_pushed_snapshots() {
-    let s = Scratch::new("pvd");
+    let s = scratch("pvd");
     let pvd_path = s.path().join("run.pvd");
     let mut pvd = PvdSeries::new(&pvd_path);
     let times = [0.0, 0.1 + 0.2, 1.0 / 3.0];
@@ -245,7 +231,7 @@ fn pvd_series_lists_pushed_snapshots() {
 
 #[test]
 fn atomic_write_replaces_and_failure_keeps_old() {
-    let s = Scratch::new("atomic");
+    let s = scratch("atomic");
     let path = s.path().join("state.json");
     fs::write(&path, b"old contents").unwrap();
 
@@ -280,7 +266,7 @@ fn atomic_write_replaces_and_failure_keeps_old() {
 
 #[test]
 fn csv_round_trip() {
-    let s = Scratch::new("csv");
+    let s = scratch("csv");
     let path = s.path().join("series.csv");
     let header = ["time", "energy", "enstrophy"];
     let rows = [
@@ -385,7 +371,7 @@ fn each_run_logs_to_its_own_log_txt() {
 #[test]
 fn body_names_with_commas_and_quotes_round_trip_through_the_csvs() {
     use tumble::run::{BODIES_HEADER, CONTACTS_HEADER, RunOptions, run_scene};
-    let dir = Scratch::new("csv-names");
+    let dir = scratch("csv-names");
     let (floor, disk) = (r#"floor, "west""#, r#"disk "a", b"#);
     let scene = tumble::scene::Scene::parse(
         r#"Scene(
@@ -406,7 +392,7 @@ fn body_names_with_commas_and_quotes_round_trip_through_the_csvs() {
         "",
     )
     .unwrap();
-    let out = dir.0.join("run");
+    let out = dir.path().join("run");
     let opts = RunOptions {
         out: Some(out.clone()),
         quiet: true,
@@ -467,7 +453,7 @@ fn body_names_with_commas_and_quotes_round_trip_through_the_csvs() {
 fn the_first_snapshot_holds_the_bodies_and_a_finite_phi() {
     use std::f64::consts::PI;
     use tumble::run::{RunOptions, run_scene};
-    let dir = Scratch::new("t0-bodies");
+    let dir = scratch("t0-bodies");
     let cases = [
         (
             r#"Scene(

@@ -9,26 +9,12 @@ use tumble::run::{RunOptions, RunSummary, run_scene};
 use tumble::scene::Scene;
 use tumble::sim::engine::Simulation;
 
-/// A fresh, empty scratch directory unique to this process and test; removed on drop.
-struct Scratch(PathBuf);
+mod common;
+use common::Scratch;
 
-impl Scratch {
-    fn new(test: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("tumble-timestep-{}-{}", std::process::id(), test));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
+/// This file's scratch directories.
+fn scratch(test: &str) -> Scratch {
+    Scratch::new("timestep", test)
 }
 
 const DT: f64 = 0.007;
@@ -85,7 +71,7 @@ fn series_times(dir: &Path) -> Vec<(f64, f64)> {
 
 #[test]
 fn fixed_dt_does_not_depend_on_output_times() {
-    let d = Scratch::new("every");
+    let d = scratch("every");
     let outputs = [
         ("every-0.1", "output: (every: 0.1)"),
         ("every-0.05", "output: (every: 0.05)"),
@@ -180,7 +166,7 @@ const VACUUM: &str = r#"Scene(
 /// clock (a sum of steps) misses the end time by a few ulps without output times to land on.
 #[test]
 fn fixed_dt_dividing_the_end_time_takes_whole_steps() {
-    let d = Scratch::new("whole");
+    let d = scratch("whole");
     let text = VACUUM
         .replace("Fixed(0.001), end_time: 0.3", "Fixed(0.005), end_time: 1.5")
         .replace("every: 0.1", "every: 0.5");
@@ -208,7 +194,7 @@ const FLUID: &str = r#"Scene(
 /// system such as the initial Poisson solve), each of them, and no more time than the wall.
 #[test]
 fn timings_cover_the_steps_only() {
-    let d = Scratch::new("timings");
+    let d = scratch("timings");
     let bodies = FIXED.replace("OUTPUT", "output: (every: 0.1)");
     for (name, text, mode) in [
         ("vacuum", VACUUM, "vacuum"),
