@@ -748,6 +748,12 @@ fn h5_contents(path: &Path) -> std::collections::BTreeMap<String, (Vec<usize>, V
                 .iter()
                 .map(|x| x.to_string())
                 .collect(),
+            T::Integer(_) => c
+                .read_raw::<i64>()
+                .unwrap()
+                .iter()
+                .map(|x| x.to_string())
+                .collect(),
             T::VarLenUnicode => c
                 .read_raw::<VarLenUnicode>()
                 .unwrap()
@@ -829,7 +835,8 @@ fn assert_same_outputs_h5(a: &Path, b: &Path) {
 }
 
 /// A run with HDF5 output (`formats`) stopped at a checkpoint and restarted has the outputs of
-/// the run that never stopped: `fields.xmf`, every `fields_*.h5` and `series.h5` (and with
+/// the run that never stopped: `fields.xmf`, `bodies.xmf`, every `fields_*.h5` and
+/// `bodies_*.h5` and `series.h5` (and with
 /// VTK the `.vti` and `fields.pvd`, and the CSV time series). The restart starts from a run
 /// directory that went on past the checkpoint (more snapshots, rows and series.h5 entries),
 /// which it must cut back.
@@ -886,6 +893,10 @@ fn hdf5_restart_reproduces_the_run(formats: &str, name: &str) {
     assert_same_outputs_h5(&straight, &stopped);
     let xmf = std::fs::read_to_string(stopped.join("fields.xmf")).unwrap();
     assert_eq!(xmf.matches("<Time ").count(), 4, "{xmf}");
+    // The body surfaces' HDF5 files and index are cut back the same way.
+    assert!(!stopped.join("bodies_000004.h5").exists());
+    let bxmf = std::fs::read_to_string(stopped.join("bodies.xmf")).unwrap();
+    assert_eq!(bxmf.matches("<Time ").count(), 4, "{bxmf}");
     let contacts = h5_contents(&stopped.join("series.h5"));
     assert!(
         contacts

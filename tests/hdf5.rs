@@ -333,3 +333,181 @@ fn hdf5_2d_with_bodies_matches_xdmf_and_memory() {
 fn hdf5_3d_with_bodies_matches_xdmf_and_memory() {
     check_run(SCENE_3D, "h5-3d");
 }
+
+/// Vacuum, 3D: a rotated box falls and spins above a static floor (which it does not reach).
+const FALLING_3D: &str = r#"Scene(
+    name: "fall3d",
+    domain: (extent: [1.0, 1.0, 1.0], cells: [16, 16, 16]),
+    fluid: (gravity: [0.0, 0.0, -9.81]),
+    vacuum: true,
+    numerics: (end_time: 0.06, dt: Fixed(0.005)),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 0.0, 1.0], offset: 0.0), kind: Static,
+         position: [0.5, 0.5, 0.05]),
+        (name: "box", shape: Box(half_extents: [0.1, 0.07, 0.05]), density: 2.0,
+         position: [0.45, 0.55, 0.7], rotation: [0.2, 0.3, 0.4],
+         velocity: [0.5, 0.0, 0.0], angular_velocity: [1.0, 2.0, 3.0]),
+    ],
+    output: (every: 0.02, formats: [Vtk, Hdf5]),
+)"#;
+
+/// Vacuum, 2D: a disk falls beside a static floor.
+const FALLING_2D: &str = r#"Scene(
+    name: "fall2d",
+    domain: (extent: [1.0, 2.0], origin: [-0.5, 0.25], cells: [16, 32]),
+    fluid: (gravity: [0.0, -9.81]),
+    vacuum: true,
+    numerics: (end_time: 0.06, dt: Fixed(0.005)),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.5), kind: Static, position: [0.0, 0.0]),
+        (name: "disk", shape: Disk(radius: 0.12), density: 2.0, position: [0.1, 1.3],
+         velocity: [0.3, 0.0]),
+    ],
+    output: (every: 0.02, formats: [Vtk, Hdf5]),
+)"#;
+
+/// `bodies.xmf` lists every snapshot with its time and describes its HDF5 file exactly; the
+/// moving body's surface points are centred on its centre in `bodies.csv` and move.
+fn check_body_surfaces(text: &str, name: &str, body: &str, nodes: usize) {
+    let d = tmp(name);
+    let scene_path = d.join(format!("{name}.ron"));
+    std::fs::write(&scene_path, text).unwrap();
+    let scene = Scene::load(&scene_path).unwrap();
+    let out = d.join("out");
+    let opts = RunOptions {
+        out: Some(out.clone()),
+        quiet: true,
+        ..Default::default()
+    };
+    run_scene(scene.clone(), &opts).unwrap();
+    let part = scene.bodies.iter().position(|b| b.name == body).unwrap() as i32;
+
+    // bodies.csv: (t, x, y, z) of the body's rows.
+    let csv = std::fs::read_to_string(out.join("bodies.csv")).unwrap();
+    let rows: Vec<[f64; 4]> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|c| c[2] == body)
+        .map(|c| [0, 3, 4, 5].map(|i| c[i].parse().unwrap()))
+        .collect();
+
+    let text = std::fs::read_to_string(out.join("bodies.xmf")).unwrap();
+    let opts = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(&text, opts).unwrap();
+    let domain = doc
+        .root_element()
+        .children()
+        .find(|n| n.has_tag_name("Domain"))
+        .unwrap();
+    let coll = domain.children().find(|n| n.has_tag_name("Grid")).unwrap();
+    assert_eq!(coll.attribute("CollectionType"), Some("Temporal"));
+    let grids: Vec<_> = coll.children().filter(|n| n.has_tag_name("Grid")).collect();
+    let every = scene.output.every.unwrap();
+    let end = scene.numerics.end_time;
+    assert_eq!(grids.len(), (end / every).round() as usize + 1);
+    let item = |n: roxmltree::Node| -> (Vec<usize>, String) {
+        let di = n.children().find(|c| c.has_tag_name("DataItem")).unwrap();
+        assert_eq!(di.attribute("Format"), Some("HDF"));
+        (
+            nums(di.attribute("Dimensions").unwrap()),
+            di.text().unwrap().trim().to_string(),
+        )
+    };
+    let mut centres: Vec<[f64; 3]> = Vec::new();
+    for (k, g) in grids.iter().enumerate() {
+        let time: f64 = g
+            .children()
+            .find(|n| n.has_tag_name("Time"))
+            .unwrap()
+            .attribute("Value")
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            (time - (k as f64 * every).min(end)).abs() < 1e-12,
+            "{k}: {time}"
+        );
+        let topo = g.children().find(|n| n.has_tag_name("Topology")).unwrap();
+        let want_topo = if nodes == 3 { "Triangle" } else { "Polyline" };
+        assert_eq!(topo.attribute("TopologyType"), Some(want_topo));
+        let geo = g.children().find(|n| n.has_tag_name("Geometry")).unwrap();
+        assert_eq!(geo.attribute("GeometryType"), Some("XYZ"));
+        let (cdims, cref) = item(topo);
+        let (pdims, pref) = item(geo);
+        let (file, cpath) = cref.split_once(":/").unwrap();
+        assert_eq!(file, format!("bodies_{k:06}.h5"));
+        assert_eq!(pref, format!("{file}:/points"));
+        let h5 = hdf5::File::open(out.join(file)).unwrap();
+        let t_attr: f64 = h5.attr("time").unwrap().read_scalar().unwrap();
+        assert_eq!(t_attr.to_bits(), time.to_bits());
+        let pts_ds = h5.dataset("points").unwrap();
+        assert_eq!(pts_ds.shape(), pdims);
+        assert_eq!(pdims[1], 3);
+        let pts: Vec<f64> = pts_ds.read_raw().unwrap();
+        let cells_ds = h5.dataset(cpath).unwrap();
+        assert_eq!(cells_ds.shape(), cdims);
+        assert_eq!(cdims[1], nodes);
+        let cells: Vec<i64> = cells_ds.read_raw().unwrap();
+        let n_pts = pdims[0] as i64;
+        assert!(cells.iter().all(|&i| (0..n_pts).contains(&i)));
+        let m = cdims[0];
+        let mut ids = Vec::new();
+        for a in g.children().filter(|n| n.has_tag_name("Attribute")) {
+            assert_eq!(a.attribute("Center"), Some("Cell"));
+            let (adims, aref) = item(a);
+            let aname = a.attribute("Name").unwrap();
+            assert_eq!(aref, format!("{file}:/{aname}"));
+            assert_eq!(adims[0], m);
+            assert_eq!(h5.dataset(aname).unwrap().shape(), adims);
+            ids.push(aname.to_string());
+        }
+        assert_eq!(ids, ["part_id", "velocity", "angular_velocity", "force"]);
+        let part_id: Vec<i32> = h5.dataset("part_id").unwrap().read_raw().unwrap();
+        // The distinct points of the body's cells.
+        let mut used: Vec<usize> = cells
+            .chunks(nodes)
+            .zip(&part_id)
+            .filter(|(_, p)| **p == part)
+            .flat_map(|(c, _)| c.iter().map(|&i| i as usize))
+            .collect();
+        used.sort_unstable();
+        used.dedup();
+        assert!(!used.is_empty());
+        let mut mean = [0.0; 3];
+        for &i in &used {
+            for c in 0..3 {
+                mean[c] += pts[3 * i + c] / used.len() as f64;
+            }
+        }
+        let row = rows
+            .iter()
+            .find(|r| (r[0] - time).abs() < 1e-12)
+            .unwrap_or_else(|| panic!("no bodies.csv row at t = {time}"));
+        for c in 0..3 {
+            assert!(
+                (mean[c] - row[c + 1]).abs() < 1e-9,
+                "{k}: {mean:?} vs {row:?}"
+            );
+        }
+        if let Some(prev) = centres.last() {
+            assert!(prev != &mean, "snapshot {k} did not move");
+        }
+        centres.push(mean);
+    }
+    // The VTK side is still written.
+    assert!(out.join("bodies.pvd").exists());
+}
+
+#[test]
+fn body_surfaces_in_xdmf_3d() {
+    check_body_surfaces(FALLING_3D, "fall3d", "box", 3);
+}
+
+#[test]
+fn body_surfaces_in_xdmf_2d() {
+    check_body_surfaces(FALLING_2D, "fall2d", "disk", 2);
+}

@@ -6,6 +6,7 @@
 //! `(ny, nx)` in 2D with a trailing axis of 3 for vectors (z = 0 in 2D), see
 //! [`crate::io::xdmf::dataset_shape`]; and root attributes `time`, `step`, `origin`, `spacing`
 //! (x, y, z) and `dims` (nx, ny, nz). `series.h5` is described at [`create_series`].
+//! With bodies, `bodies_NNNNNN.h5` holds their surfaces ([`write_surfaces`]).
 //!
 //! A snapshot file, and `series.h5` when it is created (with no rows), are written to a
 //! temporary name next to the target, closed, fsynced and renamed over it, so a killed run
@@ -548,6 +549,77 @@ pub fn read_series(path: &Path, s: &mut Series) -> io::Result<()> {
             c.normal_force = g.dataset("normal_force")?.read_raw()?;
         }
         Ok(())
+    })()
+    .map_err(|e| read_err(path, e))
+}
+
+/// Write one body-surface snapshot `g` at `time` (step `step`) to `path`, atomically: root
+/// datasets `points` (n, 3) float64 in world coordinates, `triangles` (m, 3) or, in 2D,
+/// `lines` (m, 2) int64 indices into `points`, and per cell `part_id` (m) int32 and each of
+/// the vectors (`velocity`, ...) (m, 3) float64; root attributes `time`, `step` and
+/// `part_names` (what `part_id` indexes).
+pub fn write_surfaces(
+    path: &Path,
+    time: f64,
+    step: u64,
+    g: &crate::io::surfaces::SurfaceGeometry,
+) -> io::Result<()> {
+    atomic_h5(path, |file| {
+        scalar_f64(file, "time", time)?;
+        file.new_attr::<u64>().create("step")?.write_scalar(&step)?;
+        let names: Vec<hdf5::types::VarLenUnicode> = g
+            .part_names
+            .iter()
+            .map(|n| n.parse().unwrap_or_default())
+            .collect();
+        file.new_attr::<hdf5::types::VarLenUnicode>()
+            .shape([names.len()])
+            .create("part_names")?
+            .write_raw(&names[..])?;
+        let pts: Vec<f64> = g.points.iter().flat_map(|p| p.to_array()).collect();
+        file.new_dataset::<f64>()
+            .shape([g.points.len(), 3])
+            .create("points")?
+            .write_raw(&pts)?;
+        let (name, nodes, conn): (&str, usize, Vec<i64>) = if g.triangles.is_empty() {
+            let c = g.lines.iter().flatten().map(|&i| i as i64).collect();
+            ("lines", 2, c)
+        } else {
+            let c = g.triangles.iter().flatten().map(|&i| i as i64).collect();
+            ("triangles", 3, c)
+        };
+        file.new_dataset::<i64>()
+            .shape([conn.len() / nodes, nodes])
+            .create(name)?
+            .write_raw(&conn)?;
+        let ids: Vec<i32> = g.cell_part.iter().map(|&i| i as i32).collect();
+        file.new_dataset::<i32>()
+            .shape([ids.len()])
+            .create("part_id")?
+            .write_raw(&ids)?;
+        for (vn, vs) in g.vector_names.iter().zip(&g.cell_vectors) {
+            let v: Vec<f64> = vs.iter().flat_map(|p| p.to_array()).collect();
+            file.new_dataset::<f64>()
+                .shape([vs.len(), 3])
+                .create(vn.as_str())?
+                .write_raw(&v)?;
+        }
+        Ok(())
+    })
+}
+
+/// What the body-surface index needs of a surface snapshot written by [`write_surfaces`]:
+/// its time, points, cells and nodes per cell (3 triangles, 2 lines).
+pub fn read_surface_layout(path: &Path) -> io::Result<(f64, usize, usize, usize)> {
+    (|| -> hdf5::Result<(f64, usize, usize, usize)> {
+        let file = hdf5::File::open(path)?;
+        let time = file.attr("time")?.read_scalar::<f64>()?;
+        let points = file.dataset("points")?.shape()[0];
+        let (cells, nodes) = match file.dataset("triangles") {
+            Ok(d) => (d.shape()[0], 3),
+            Err(_) => (file.dataset("lines")?.shape()[0], 2),
+        };
+        Ok((time, points, cells, nodes))
     })()
     .map_err(|e| read_err(path, e))
 }

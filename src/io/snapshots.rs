@@ -5,8 +5,9 @@
 //!
 //! With bodies, every snapshot also writes the bodies' surfaces in their current pose
 //! (`bodies_NNNNNN.vtp` indexed by `bodies.pvd`, see [`crate::io::surfaces`]), vacuum runs
-//! included; a run whose scene asks for no field (`fields: []`) writes no `.vti` (they would
-//! be empty) and no `fields.pvd`.
+//! included, and with HDF5 output also `bodies_NNNNNN.h5` indexed by `bodies.xmf` (the same
+//! surfaces, computed once, [`SurfaceGeometry`]); a run whose scene asks for no field
+//! (`fields: []`) writes no `.vti` (they would be empty) and no `fields.pvd`.
 //!
 //! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
 //! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
@@ -15,7 +16,7 @@
 use crate::bodies::{Body, BodySurface, Hydro, RigidState};
 use crate::io::checkpoint::RunProgress;
 use crate::io::output::{PvdSeries, VtkField, write_vti_compressed};
-use crate::io::surfaces::{SurfacePart, SurfaceSeries};
+use crate::io::surfaces::{SurfaceGeometry, SurfacePart, SurfaceSeries};
 use crate::scene::{FieldName, OutputFormat};
 use crate::sim::engine::Simulation;
 use anyhow::Context;
@@ -137,12 +138,17 @@ impl Snapshots {
 
     /// Make the run directory match a resumed [`Snapshots`]: remove the snapshot files
     /// numbered from [`count`](Snapshots::count) on (written after the checkpoint), rewrite
-    /// `fields.pvd`, `bodies.pvd` and `fields.xmf` with the snapshots kept, and cut
+    /// `fields.pvd`, `bodies.pvd`, `fields.xmf` and `bodies.xmf` with the snapshots kept, and cut
     /// `series.h5` back to the steps up to the checkpoint.
     pub fn cut_back(&mut self) -> anyhow::Result<()> {
         for k in self.count.. {
             let mut found = false;
-            for name in ["fields_{k}.vti", "fields_{k}.h5", "bodies_{k}.vtp"] {
+            for name in [
+                "fields_{k}.vti",
+                "fields_{k}.h5",
+                "bodies_{k}.vtp",
+                "bodies_{k}.h5",
+            ] {
                 let f = self.dir.join(name.replace("{k}", &format!("{k:06}")));
                 if f.exists() {
                     std::fs::remove_file(&f)
@@ -163,6 +169,9 @@ impl Snapshots {
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.hdf5.as_mut() {
             h.xmf.write().context("cannot write fields.xmf")?;
+            if let Some(b) = &h.bodies {
+                b.write().context("cannot write bodies.xmf")?;
+            }
             h.cut_back(&self.dir)?;
         }
         Ok(())
@@ -234,14 +243,18 @@ impl Snapshots {
                 .context("cannot write fields.pvd")?;
             written.push(file);
         }
+        let mut surfaces = None;
         if let Some(series) = self.surfaces.as_mut() {
-            let file = write_surfaces(series, self.count, sim)?;
+            let (file, g) = write_surfaces(series, self.count, sim)?;
             written.push(file);
+            surfaces = Some(g);
         }
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.hdf5.as_mut() {
-            written.extend(h.snapshot(&self.dir, self.count, sim, vtk)?);
+            written.extend(h.snapshot(&self.dir, self.count, sim, vtk, surfaces.as_ref())?);
         }
+        #[cfg(not(feature = "hdf5"))]
+        let _ = surfaces;
         self.count += 1;
         Ok(written)
     }
@@ -258,12 +271,13 @@ impl Snapshots {
 }
 
 /// Snapshot `index` of the bodies' surfaces, each at its pose with its velocity, angular
-/// velocity and hydrodynamic force, in body-id order; returns the file name.
+/// velocity and hydrodynamic force, in body-id order; returns the file name and the surfaces
+/// (in world space, for the other formats).
 fn write_surfaces(
     series: &mut SurfaceSeries,
     index: usize,
     sim: &Simulation,
-) -> anyhow::Result<String> {
+) -> anyhow::Result<(String, SurfaceGeometry)> {
     let world = &sim.world;
     let mut bodies: Vec<_> = world
         .try_query::<(&Body, &RigidState, &Hydro, &BodySurface)>()
@@ -280,9 +294,11 @@ fn write_surfaces(
             vectors: vec![st.velocity, st.angular_velocity, h.force],
         })
         .collect();
-    series
-        .write(index, sim.time(), &parts)
-        .with_context(|| format!("cannot write bodies_{index:06}.vtp or bodies.pvd"))
+    let g = SurfaceGeometry::new(&parts, series.vector_names()).context("body surfaces")?;
+    let file = series
+        .write_geometry(index, sim.time(), &g)
+        .with_context(|| format!("cannot write bodies_{index:06}.vtp or bodies.pvd"))?;
+    Ok((file, g))
 }
 
 /// Call `f` with the fields of a snapshot of `sim`, in the scene's `output.fields` order:
@@ -324,6 +340,8 @@ fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
 #[cfg(feature = "hdf5")]
 struct Hdf5Outputs {
     xmf: crate::io::xdmf::XdmfSeries,
+    /// The index of the body surfaces' HDF5 files, `bodies.xmf` (a run with bodies).
+    bodies: Option<crate::io::xdmf::SurfaceXdmf>,
     /// The rows recorded since `series.h5` was last appended to.
     series: crate::io::hdf5_out::Series,
     /// The step last recorded (a step is recorded once).
@@ -372,6 +390,13 @@ impl Hdf5Outputs {
         Hdf5Outputs {
             xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), sim.grid())
                 .with_precision(sim.scene().output.precision),
+            bodies: (!scene.bodies.is_empty()).then(|| {
+                crate::io::xdmf::SurfaceXdmf::new(
+                    dir.join("bodies.xmf"),
+                    &SURFACE_VECTORS,
+                    Vec::new(),
+                )
+            }),
             series: Series {
                 global,
                 bodies,
@@ -411,6 +436,35 @@ impl Hdf5Outputs {
         h.xmf =
             crate::io::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries)
                 .with_precision(sim.scene().output.precision);
+        if h.bodies.is_some() {
+            let mut entries = Vec::with_capacity(count);
+            for k in 0..count {
+                let file = format!("bodies_{k:06}.h5");
+                let (time, points, cells, nodes) =
+                    crate::io::hdf5_out::read_surface_layout(&dir.join(&file)).map_err(|e| {
+                        format!("{e}: the run directory does not match the checkpoint")
+                    })?;
+                if time > t0 {
+                    return Err(format!(
+                        "{} is a snapshot at t = {time}, after the checkpoint: the run \
+                         directory does not match the checkpoint",
+                        dir.join(&file).display()
+                    ));
+                }
+                entries.push(crate::io::xdmf::SurfaceEntry {
+                    time,
+                    file,
+                    points,
+                    cells,
+                    nodes,
+                });
+            }
+            h.bodies = Some(crate::io::xdmf::SurfaceXdmf::new(
+                dir.join("bodies.xmf"),
+                &SURFACE_VECTORS,
+                entries,
+            ));
+        }
         let path = dir.join("series.h5");
         let cut = crate::io::hdf5_out::check_series(&path, &h.series, step0 as usize + 1, t0)
             .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?
@@ -480,8 +534,25 @@ impl Hdf5Outputs {
         k: usize,
         sim: &Simulation,
         fields: &[VtkField],
+        surfaces: Option<&SurfaceGeometry>,
     ) -> anyhow::Result<Vec<String>> {
         use crate::io::xdmf::XdmfEntry;
+        let mut written = Vec::new();
+        if let (Some(index), Some(g)) = (self.bodies.as_mut(), surfaces) {
+            let file = format!("bodies_{k:06}.h5");
+            crate::io::hdf5_out::write_surfaces(&dir.join(&file), sim.time(), sim.steps(), g)
+                .with_context(|| format!("cannot write {file}"))?;
+            index
+                .push(crate::io::xdmf::SurfaceEntry {
+                    time: sim.time(),
+                    file: file.clone(),
+                    points: g.points.len(),
+                    cells: g.n_cells(),
+                    nodes: if g.triangles.is_empty() { 2 } else { 3 },
+                })
+                .context("cannot write bodies.xmf")?;
+            written.extend([file, "bodies.xmf".to_string()]);
+        }
         let file = format!("fields_{k:06}.h5");
         crate::io::hdf5_out::write_fields(
             &dir.join(&file),
@@ -500,7 +571,8 @@ impl Hdf5Outputs {
             })
             .context("cannot write fields.xmf")?;
         self.write_series(dir)?;
-        Ok(vec![file, "fields.xmf".into(), "series.h5".into()])
+        written.extend([file, "fields.xmf".into(), "series.h5".into()]);
+        Ok(written)
     }
 
     /// Cut `series.h5` back to the checkpoint a restart continues from (see

@@ -62,32 +62,127 @@ impl SurfaceSeries {
 
     /// Writes snapshot `index` at time `t` and lists it in the `.pvd`; returns the file name.
     pub fn write(&mut self, index: usize, t: f64, parts: &[SurfacePart]) -> io::Result<String> {
+        let g = SurfaceGeometry::new(parts, &self.vector_names)?;
+        self.write_geometry(index, t, &g)
+    }
+
+    /// Writes snapshot `index` at time `t` from its computed surfaces (with the series'
+    /// vectors) and lists it in the `.pvd`; returns the file name.
+    pub fn write_geometry(
+        &mut self,
+        index: usize,
+        t: f64,
+        g: &SurfaceGeometry,
+    ) -> io::Result<String> {
+        if g.vector_names != self.vector_names {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "surfaces carry the vectors {:?}, the series {:?}",
+                    g.vector_names, self.vector_names
+                ),
+            ));
+        }
+        let name = format!("{}_{index:06}.vtp", self.stem);
+        let xml = vtp(t, g);
+        atomic_write(&self.dir.join(&name), xml.as_bytes())?;
+        self.pvd.push(t, &name)?;
+        Ok(name)
+    }
+
+    /// The names of the vectors the parts carry.
+    pub fn vector_names(&self) -> &[&'static str] {
+        &self.vector_names
+    }
+}
+
+/// The surfaces of one snapshot in world space, computed once for every writer (`.vtp`, and
+/// with the `hdf5` feature `bodies_NNNNNN.h5`): the parts' points one after the other, their
+/// cells with global point indices, and per cell the part's index and vectors. Cells are in
+/// VTK's PolyData order: every part's lines, then every part's triangles (a 2D scene has only
+/// lines, a 3D one only triangles).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceGeometry {
+    /// Part names, indexed by [`cell_part`](SurfaceGeometry::cell_part).
+    pub part_names: Vec<String>,
+    /// Points in world coordinates.
+    pub points: Vec<DVec3>,
+    /// Line segments (2D surfaces), global point indices.
+    pub lines: Vec<[usize; 2]>,
+    /// Triangles (3D surfaces), global point indices.
+    pub triangles: Vec<[usize; 3]>,
+    /// The part of each cell, lines first then triangles.
+    pub cell_part: Vec<u32>,
+    /// Names of the per-cell vectors.
+    pub vector_names: Vec<String>,
+    /// Per vector name, its value on each cell (same order as `cell_part`).
+    pub cell_vectors: Vec<Vec<DVec3>>,
+}
+
+impl SurfaceGeometry {
+    /// The world-space surfaces of `parts`, whose vectors are named `vector_names`; an error if
+    /// a part has not one vector per name.
+    pub fn new(parts: &[SurfacePart], vector_names: &[&str]) -> io::Result<Self> {
         for p in parts {
-            if p.vectors.len() != self.vector_names.len() {
+            if p.vectors.len() != vector_names.len() {
                 return Err(io::Error::new(
                     io::ErrorKind::InvalidInput,
                     format!(
                         "surface part `{}` has {} vectors, the series {}",
                         p.name,
                         p.vectors.len(),
-                        self.vector_names.len()
+                        vector_names.len()
                     ),
                 ));
             }
         }
-        let name = format!("{}_{index:06}.vtp", self.stem);
-        let xml = vtp(t, parts, &self.vector_names);
-        atomic_write(&self.dir.join(&name), xml.as_bytes())?;
-        self.pvd.push(t, &name)?;
-        Ok(name)
+        let mut g = SurfaceGeometry {
+            part_names: parts.iter().map(|p| p.name.to_string()).collect(),
+            vector_names: vector_names.iter().map(|n| n.to_string()).collect(),
+            cell_vectors: vec![Vec::new(); vector_names.len()],
+            ..Default::default()
+        };
+        let mut base = 0usize;
+        let mut bases = Vec::with_capacity(parts.len());
+        for p in parts {
+            bases.push(base);
+            g.points
+                .extend(p.mesh.points.iter().map(|q| p.center + p.orientation * *q));
+            base += p.mesh.points.len();
+        }
+        for (i, (p, &b)) in parts.iter().zip(&bases).enumerate() {
+            for l in &p.mesh.lines {
+                g.lines.push(l.map(|k| b + k as usize));
+                g.push_cell(i, p);
+            }
+        }
+        for (i, (p, &b)) in parts.iter().zip(&bases).enumerate() {
+            for t in &p.mesh.triangles {
+                g.triangles.push(t.map(|k| b + k as usize));
+                g.push_cell(i, p);
+            }
+        }
+        Ok(g)
+    }
+
+    fn push_cell(&mut self, part: usize, p: &SurfacePart) {
+        self.cell_part.push(part as u32);
+        for (c, v) in self.cell_vectors.iter_mut().zip(&p.vectors) {
+            c.push(*v);
+        }
+    }
+
+    /// Number of cells (lines and triangles).
+    pub fn n_cells(&self) -> usize {
+        self.cell_part.len()
     }
 }
 
 /// The `.vtp` text of one snapshot.
-fn vtp(t: f64, parts: &[SurfacePart], vector_names: &[&str]) -> String {
-    let n_points: usize = parts.iter().map(|p| p.mesh.points.len()).sum();
-    let n_lines: usize = parts.iter().map(|p| p.mesh.lines.len()).sum();
-    let n_polys: usize = parts.iter().map(|p| p.mesh.triangles.len()).sum();
+fn vtp(t: f64, g: &SurfaceGeometry) -> String {
+    let n_points = g.points.len();
+    let n_lines = g.lines.len();
+    let n_polys = g.triangles.len();
     let mut s = String::with_capacity(64 * (n_points + n_lines + n_polys) + 1024);
     s.push_str("<?xml version=\"1.0\"?>\n");
     s.push_str(
@@ -103,10 +198,10 @@ fn vtp(t: f64, parts: &[SurfacePart], vector_names: &[&str]) -> String {
     let _ = write!(
         s,
         "<Array type=\"String\" Name=\"part_names\" NumberOfTuples=\"{}\" format=\"ascii\">",
-        parts.len()
+        g.part_names.len()
     );
-    for p in parts {
-        for b in p.name.bytes() {
+    for name in &g.part_names {
+        for b in name.bytes() {
             let _ = write!(s, "{b} ");
         }
         s.push_str("0 ");
@@ -118,83 +213,48 @@ fn vtp(t: f64, parts: &[SurfacePart], vector_names: &[&str]) -> String {
          NumberOfStrips=\"0\" NumberOfPolys=\"{n_polys}\">"
     );
     s.push_str("<Points>\n<DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for p in parts {
-        for q in &p.mesh.points {
-            let w = p.center + p.orientation * *q;
-            let _ = writeln!(s, "{} {} {}", w.x as f32, w.y as f32, w.z as f32);
-        }
+    for w in &g.points {
+        let _ = writeln!(s, "{} {} {}", w.x as f32, w.y as f32, w.z as f32);
     }
     s.push_str("</DataArray>\n</Points>\n");
     // Cell data: VTK orders the cells of a PolyData as verts, lines, polys, strips.
     s.push_str("<CellData Scalars=\"part_id\">\n");
     s.push_str("<DataArray type=\"Int32\" Name=\"part_id\" format=\"ascii\">\n");
-    for pass in 0..2 {
-        for (i, p) in parts.iter().enumerate() {
-            let n = if pass == 0 {
-                p.mesh.lines.len()
-            } else {
-                p.mesh.triangles.len()
-            };
-            for _ in 0..n {
-                let _ = write!(s, "{i} ");
-            }
-        }
+    for i in &g.cell_part {
+        let _ = write!(s, "{i} ");
     }
     s.push_str("\n</DataArray>\n");
-    for (k, vn) in vector_names.iter().enumerate() {
+    for (vn, vs) in g.vector_names.iter().zip(&g.cell_vectors) {
         let _ = writeln!(
             s,
             "<DataArray type=\"Float32\" Name=\"{vn}\" NumberOfComponents=\"3\" format=\"ascii\">"
         );
-        for pass in 0..2 {
-            for p in parts {
-                let n = if pass == 0 {
-                    p.mesh.lines.len()
-                } else {
-                    p.mesh.triangles.len()
-                };
-                let v = p.vectors[k];
-                for _ in 0..n {
-                    let _ = writeln!(s, "{} {} {}", v.x as f32, v.y as f32, v.z as f32);
-                }
-            }
+        for v in vs {
+            let _ = writeln!(s, "{} {} {}", v.x as f32, v.y as f32, v.z as f32);
         }
         s.push_str("</DataArray>\n");
     }
     s.push_str("</CellData>\n");
-    cells(&mut s, "Lines", parts, |m| {
-        m.lines.iter().map(|l| l.to_vec()).collect()
-    });
-    cells(&mut s, "Polys", parts, |m| {
-        m.triangles.iter().map(|t| t.to_vec()).collect()
-    });
+    cells(&mut s, "Lines", g.lines.iter().map(|c| &c[..]));
+    cells(&mut s, "Polys", g.triangles.iter().map(|c| &c[..]));
     s.push_str("</Piece>\n</PolyData>\n</VTKFile>\n");
     s
 }
 
 /// A `<Lines>` or `<Polys>` block: connectivity (global point indices) and offsets.
-fn cells(
-    s: &mut String,
-    tag: &str,
-    parts: &[SurfacePart],
-    of: impl Fn(&SurfaceMesh) -> Vec<Vec<u32>>,
-) {
+fn cells<'a>(s: &mut String, tag: &str, of: impl Iterator<Item = &'a [usize]>) {
     let _ = writeln!(
         s,
         "<{tag}>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
     );
-    let mut base = 0usize;
     let mut offsets = Vec::new();
     let mut end = 0usize;
-    for p in parts {
-        for c in of(p.mesh) {
-            for i in &c {
-                let _ = write!(s, "{} ", base + *i as usize);
-            }
-            end += c.len();
-            offsets.push(end);
+    for c in of {
+        for i in c {
+            let _ = write!(s, "{i} ");
         }
-        base += p.mesh.points.len();
+        end += c.len();
+        offsets.push(end);
     }
     s.push_str("\n</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
     for o in offsets {

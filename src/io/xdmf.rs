@@ -199,3 +199,106 @@ impl XdmfSeries {
         s
     }
 }
+
+/// One body-surface snapshot in `bodies.xmf`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceEntry {
+    /// Simulated time.
+    pub time: f64,
+    /// The HDF5 file (see [`crate::io::hdf5_out::write_surfaces`]), relative to the index.
+    pub file: String,
+    /// Number of points.
+    pub points: usize,
+    /// Number of cells.
+    pub cells: usize,
+    /// Nodes per cell: 3 (triangles, dataset `triangles`) or 2 (segments, dataset `lines`).
+    pub nodes: usize,
+}
+
+/// The XDMF index of the body-surface snapshots (`bodies.xmf`): a temporal collection of
+/// unstructured grids, `Triangle` (3D) or `Polyline` of 2 nodes (2D) topology, `XYZ`
+/// geometry, and cell-centred `part_id` and vectors; rewritten atomically on every push.
+#[derive(Clone, Debug)]
+pub struct SurfaceXdmf {
+    path: PathBuf,
+    vectors: Vec<String>,
+    entries: Vec<SurfaceEntry>,
+}
+
+impl SurfaceXdmf {
+    /// An index in `path` of snapshots whose cells carry `part_id` and `vectors`, listing
+    /// `entries` (nothing written until [`write`](SurfaceXdmf::write) or a push).
+    pub fn new(path: impl Into<PathBuf>, vectors: &[&str], entries: Vec<SurfaceEntry>) -> Self {
+        SurfaceXdmf {
+            path: path.into(),
+            vectors: vectors.iter().map(|v| v.to_string()).collect(),
+            entries,
+        }
+    }
+
+    /// The listed snapshots.
+    pub fn entries(&self) -> &[SurfaceEntry] {
+        &self.entries
+    }
+
+    /// Add a snapshot (its HDF5 file complete) and rewrite the index; on failure the entry is
+    /// not kept.
+    pub fn push(&mut self, entry: SurfaceEntry) -> io::Result<()> {
+        self.entries.push(entry);
+        let r = self.write();
+        if r.is_err() {
+            self.entries.pop();
+        }
+        r
+    }
+
+    /// Rewrite the index atomically.
+    pub fn write(&self) -> io::Result<()> {
+        atomic_write(&self.path, self.text().as_bytes())
+    }
+
+    /// The XML text of the index.
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        s.push_str("<?xml version=\"1.0\" ?>\n");
+        s.push_str("<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n");
+        s.push_str("<Xdmf Version=\"2.0\">\n  <Domain>\n");
+        s.push_str(
+            "    <Grid Name=\"bodies\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+        );
+        for (k, e) in self.entries.iter().enumerate() {
+            let (topology, dataset) = if e.nodes == 3 {
+                ("TopologyType=\"Triangle\"", "triangles")
+            } else {
+                ("TopologyType=\"Polyline\" NodesPerElement=\"2\"", "lines")
+            };
+            let (m, n, nodes, f) = (e.cells, e.points, e.nodes, &e.file);
+            let _ = writeln!(
+                s,
+                "      <Grid Name=\"bodies{k:06}\" GridType=\"Uniform\">\n        \
+                 <Time Value=\"{}\"/>\n        \
+                 <Topology {topology} NumberOfElements=\"{m}\">\n          \
+                 <DataItem Dimensions=\"{m} {nodes}\" NumberType=\"Int\" Precision=\"8\" \
+                 Format=\"HDF\">{f}:/{dataset}</DataItem>\n        </Topology>\n        \
+                 <Geometry GeometryType=\"XYZ\">\n          \
+                 <DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" \
+                 Format=\"HDF\">{f}:/points</DataItem>\n        </Geometry>\n        \
+                 <Attribute Name=\"part_id\" AttributeType=\"Scalar\" Center=\"Cell\">\n          \
+                 <DataItem Dimensions=\"{m}\" NumberType=\"Int\" Precision=\"4\" \
+                 Format=\"HDF\">{f}:/part_id</DataItem>\n        </Attribute>",
+                fmt_f64(e.time)
+            );
+            for v in &self.vectors {
+                let _ = writeln!(
+                    s,
+                    "        <Attribute Name=\"{v}\" AttributeType=\"Vector\" Center=\"Cell\">\n          \
+                     <DataItem Dimensions=\"{m} 3\" NumberType=\"Float\" Precision=\"8\" \
+                     Format=\"HDF\">{f}:/{v}</DataItem>\n        </Attribute>"
+                );
+            }
+            s.push_str("      </Grid>\n");
+        }
+        s.push_str("    </Grid>\n  </Domain>\n</Xdmf>\n");
+        s
+    }
+}
