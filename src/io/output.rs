@@ -127,6 +127,22 @@ pub fn disk_full(path: &Path, e: io::Error) -> io::Error {
     }
 }
 
+/// Appends `entry` to an index's `entries` and rewrites the index with `write`; on failure the
+/// entry is removed again, so the in-memory list always matches the file on disk.
+pub fn push_and_write<T, S>(
+    owner: &mut S,
+    entries: impl Fn(&mut S) -> &mut Vec<T>,
+    entry: T,
+    write: impl Fn(&S) -> io::Result<()>,
+) -> io::Result<()> {
+    entries(owner).push(entry);
+    let r = write(owner);
+    if r.is_err() {
+        entries(owner).pop();
+    }
+    r
+}
+
 /// Formats an `f64` so that parsing it back gives exactly the same value: plain decimal for
 /// ordinary magnitudes, scientific notation for very large or very small ones.
 pub fn fmt_f64(x: f64) -> String {
@@ -767,12 +783,8 @@ impl PvdSeries {
     /// `.pvd` atomically. On failure the entry is not kept, so the in-memory list matches
     /// the file on disk.
     pub fn push(&mut self, time: f64, file_name: &str) -> io::Result<()> {
-        self.entries.push((time, file_name.to_string()));
-        let r = self.write();
-        if r.is_err() {
-            self.entries.pop();
-        }
-        r
+        let entry = (time, file_name.to_string());
+        push_and_write(self, |s| &mut s.entries, entry, Self::write)
     }
 
     /// Rewrites the `.pvd` atomically with the listed snapshots.

@@ -103,12 +103,7 @@ impl XdmfSeries {
     /// Add a snapshot (its HDF5 file complete) and rewrite the index atomically. On failure
     /// the entry is not kept.
     pub fn push(&mut self, entry: XdmfEntry) -> io::Result<()> {
-        self.entries.push(entry);
-        let r = self.write();
-        if r.is_err() {
-            self.entries.pop();
-        }
-        r
+        crate::io::output::push_and_write(self, |s| &mut s.entries, entry, Self::write)
     }
 
     /// Rewrite the index atomically with the listed snapshots.
@@ -244,12 +239,7 @@ impl SurfaceXdmf {
     /// Add a snapshot (its HDF5 file complete) and rewrite the index; on failure the entry is
     /// not kept.
     pub fn push(&mut self, entry: SurfaceEntry) -> io::Result<()> {
-        self.entries.push(entry);
-        let r = self.write();
-        if r.is_err() {
-            self.entries.pop();
-        }
-        r
+        crate::io::output::push_and_write(self, |s| &mut s.entries, entry, Self::write)
     }
 
     /// Rewrite the index atomically.
