@@ -157,7 +157,8 @@ impl crate::schedule::Plugin for BaroclinicPlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         let mode = ctx.mode();
-        if mode.fluid() && mode.has_bodies() {
+        let coupling = ctx.world.resource::<Params>().body_coupling;
+        if mode.fluid() && mode.has_bodies() && coupling != BodyCoupling::Pressure {
             ctx.add_system(PhysicsSet::Baroclinic, "baroclinic", baroclinic)?;
         }
         Ok(())

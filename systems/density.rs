@@ -20,8 +20,16 @@ pub fn density(
     mut out: ResMut<BodyFields>,
 ) {
     let rho_f = params.rho_fluid;
+    let pressure = params.body_coupling == crate::base::params::BodyCoupling::Pressure;
     let out = &mut *out;
-    out.rho.par_iter_mut().for_each(|r| *r = rho_f);
+    if pressure {
+        let (rho, phase) = (&mut out.rho, &out.rho_phase);
+        rho.par_iter_mut()
+            .zip(phase.par_iter())
+            .for_each(|(r, p)| *r = *p);
+    } else {
+        out.rho.par_iter_mut().for_each(|r| *r = rho_f);
+    }
     out.chi.par_iter_mut().for_each(|c| *c = 0.0);
     out.phi.par_iter_mut().for_each(|p| *p = f64::NEG_INFINITY);
     out.owner.par_iter_mut().for_each(|o| *o = NO_BODY);
@@ -44,6 +52,7 @@ pub fn density(
             crate::base::grid::SyncPtr(out.owner.as_mut_ptr()),
         );
         let id = body.id as u32;
+        let phase = &out.rho_phase;
         (0..rows).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
             for a in 0..dx {
@@ -51,7 +60,13 @@ pub fn density(
                 let l = r * dx + a;
                 // SAFETY: distinct patch rows map to distinct grid nodes.
                 unsafe {
-                    rho.write(g, rho.read(g) + drho * patch.chi[l]);
+                    // ρ_i - ρ_P at this node (ρ_F - ρ_P is 0 without phases).
+                    let d = if pressure && drho != 0.0 {
+                        mat.density - phase[g]
+                    } else {
+                        drho
+                    };
+                    rho.write(g, rho.read(g) + d * patch.chi[l]);
                     chi.write(g, chi.read(g) + patch.chi[l]);
                     if patch.phi[l] > phi.read(g) {
                         phi.write(g, patch.phi[l]);

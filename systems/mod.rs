@@ -18,6 +18,7 @@ pub mod free_motion;
 pub mod level_sets;
 pub mod penalization;
 pub mod poisson;
+pub mod pressure;
 pub mod rigid_update;
 pub mod rigid_velocity;
 pub mod transport;
@@ -32,6 +33,7 @@ pub fn builtin() -> Vec<Box<dyn Plugin>> {
         Box::new(collision::CollisionPlugin),
         Box::new(penalization::PenalizationPlugin),
         Box::new(baroclinic::BaroclinicPlugin),
+        Box::new(pressure::PressurePlugin),
         Box::new(transport::TransportPlugin),
         Box::new(diffusion::DiffusionPlugin),
         Box::new(poisson::PoissonPlugin),

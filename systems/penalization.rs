@@ -64,6 +64,7 @@ pub fn penalization(
     };
     let mask = params.penalization_mask(grid.h);
     let momentum = params.body_coupling == BodyCoupling::Momentum;
+    let pressure = params.body_coupling == BodyCoupling::Pressure;
     let fields = &mut *fields;
     // Moving bodies first, static ones last: where a body overlaps a wall, the wall wins and
     // the fluid there is at rest, which is what stops a body at a wall.
@@ -75,7 +76,7 @@ pub fn penalization(
             let dynamic = body.is_dynamic();
             // With the momentum coupling a dynamic body's force is the fluid's share of its
             // momentum balance, reported by `rigid_velocity`.
-            let own_force = !(dynamic && momentum);
+            let own_force = !(dynamic && (momentum || pressure));
             let [dx, dy, _] = patch.dims;
             if patch.is_empty() {
                 if own_force {
@@ -96,11 +97,8 @@ pub fn penalization(
                     let mut f = DVec3::ZERO;
                     let mut m = DVec3::ZERO;
                     for a in 0..dx {
-                        let chi = if dynamic {
-                            patch.chi[r * dx + a]
-                        } else {
-                            mask.apply(patch.chi[r * dx + a], patch.phi[r * dx + a])
-                        };
+                        let (cv, phi) = (patch.chi[r * dx + a], patch.phi[r * dx + a]);
+                        let chi = if dynamic { cv } else { mask.apply(cv, phi) };
                         if chi == 0.0 {
                             continue;
                         }
@@ -138,7 +136,11 @@ pub fn penalization(
             }
         }
     }
-    curl_add(&grid, &bf.du, fields.omega_mut());
+    // Under the pressure projection the increment is projected with the density first
+    // (`pressure`), which then adds its curl.
+    if !pressure {
+        curl_add(&grid, &bf.du, fields.omega_mut());
+    }
 }
 
 /// ω += ∇×a by centred differences (periodic).

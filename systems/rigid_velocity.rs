@@ -35,7 +35,7 @@
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::BodyCoupling;
-use crate::bodies::{Body, GridPatch, Hydro, Material, RigidState, kinematic_velocity};
+use crate::bodies::{Body, BodyFields, GridPatch, Hydro, Material, RigidState, kinematic_velocity};
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -68,7 +68,7 @@ pub fn integrate(
     center: DVec3,
     u: &[Vec<f64>],
     sums: &mut BodySums,
-    weight: impl Fn(f64) -> f64 + Sync,
+    weight: impl Fn(f64, f64, usize) -> f64 + Sync,
 ) -> (f64, DVec3, DVec3, DVec3, DMat3) {
     let [dx, dy, _] = patch.dims;
     if patch.is_empty() {
@@ -84,12 +84,12 @@ pub fn integrate(
             let (b, c) = (r % dy, r / dy);
             let mut s = [0.0; 16];
             for a in 0..dx {
-                let chi = weight(patch.chi[r * dx + a]);
+                let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
+                let g = grid.idx(i, j, k);
+                let chi = weight(patch.chi[r * dx + a], patch.phi[r * dx + a], g);
                 if chi == 0.0 {
                     continue;
                 }
-                let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
-                let g = grid.idx(i, j, k);
                 let p = grid.pos(i, j, k);
                 let rv = DVec3::new(p[0], p[1], p[2]) - center;
                 let uv = DVec3::new(u[0][g], u[1][g], if dim == 3 { u[2][g] } else { 0.0 });
@@ -160,7 +160,7 @@ pub fn mass_properties(
     t: f64,
     state: &mut RigidState,
 ) -> bool {
-    let (vol, centroid, _, _, j) = integrate(grid, patch, state.center, u, sums, |c| c);
+    let (vol, centroid, _, _, j) = integrate(grid, patch, state.center, u, sums, |c, _, _| c);
     state.volume = vol;
     state.centroid = centroid;
     state.inertia = j;
@@ -178,10 +178,13 @@ pub fn rigid_velocity(
     params: Res<Params>,
     time: Res<SimTime>,
     fields: Res<Fields>,
+    bf: Res<BodyFields>,
     mut sums: ResMut<BodySums>,
     mut bodies: Query<(&Body, &GridPatch, &Material, &mut RigidState, &mut Hydro)>,
 ) {
     let momentum = params.body_coupling == BodyCoupling::Momentum;
+    let pressure = params.body_coupling == BodyCoupling::Pressure;
+    let rho = &bf.rho;
     let g = DVec3::from_array(params.gravity);
     for (body, patch, mat, mut state, mut hydro) in &mut bodies {
         if body.is_static() {
@@ -199,10 +202,20 @@ pub fn rigid_velocity(
         // small but λΔtχ ≫ 1, is dragged along at ū every step: momentum from nothing that
         // made a settling sphere fall ~50% too fast.)
         let ldt = params.lambda * time.dt;
-        let (wvol, wcentroid, mom, ang, wj) =
-            integrate(&grid, patch, state.center, &fields.u, &mut sums, |c| {
-                ldt * c / (1.0 + ldt * c)
-            });
+        // Under the pressure projection the flow carries each region with its own density,
+        // so the rigid velocity is the density-weighted mean (the penalization then conserves
+        // momentum).
+        let (wvol, wcentroid, mom, ang, wj) = integrate(
+            &grid,
+            patch,
+            state.center,
+            &fields.u,
+            &mut sums,
+            |c, _, g| {
+                let w = ldt * c / (1.0 + ldt * c);
+                if pressure { rho[g] * w } else { w }
+            },
+        );
         if wvol <= 0.0 {
             continue;
         }
@@ -215,6 +228,44 @@ pub fn rigid_velocity(
         let first = fields.dt_prev <= 0.0;
         if first {
             *hydro = Hydro::default();
+            if pressure {
+                // The first step's weight beyond buoyancy.
+                let excess = excess_weight(
+                    &grid,
+                    patch,
+                    state.center,
+                    &fields.u,
+                    &mut sums,
+                    mat.density,
+                    &bf.rho_phase,
+                );
+                state.velocity += excess * DVec3::from_array(params.gravity) * time.dt / wvol;
+            }
+            continue;
+        }
+        if pressure {
+            // The fluid's force and torque on the body: its momentum change over the step
+            // the flow has just made, less its weight. (wvol is the body's mass here.)
+            let dt = fields.dt_prev;
+            let mass = wvol;
+            let g = DVec3::from_array(params.gravity);
+            *hydro = Hydro {
+                force: mass * (v_flow - v_prev) / dt - mass * g,
+                torque: wj * (w_flow - w_prev) / dt,
+            };
+            state.velocity = v_flow
+                + excess_weight(
+                    &grid,
+                    patch,
+                    state.center,
+                    &fields.u,
+                    &mut sums,
+                    mat.density,
+                    &bf.rho_phase,
+                ) * g
+                    * time.dt
+                    / mass;
+            state.angular_velocity = w_flow;
             continue;
         }
         if !momentum {
@@ -249,6 +300,23 @@ pub fn rigid_velocity(
             torque: l_fluid / dt,
         };
     }
+}
+
+/// The body's mass beyond the fluid it displaces, ∫ (ρ_i - ρ_P) χ_i dx (ρ_P the density of
+/// the fluid phases), whose weight acts on its rigid velocity under the pressure projection.
+fn excess_weight(
+    grid: &Grid,
+    patch: &GridPatch,
+    center: DVec3,
+    u: &[Vec<f64>],
+    sums: &mut BodySums,
+    density: f64,
+    phase: &[f64],
+) -> f64 {
+    // Two positive integrals (`integrate` returns 0 for a non-positive weight sum).
+    let volume = integrate(grid, patch, center, u, sums, |c, _, _| c).0;
+    let displaced = integrate(grid, patch, center, u, sums, |c, _, g| phase[g] * c).0;
+    density * volume - displaced
 }
 
 /// J⁻¹ l: in 2D about z only (J_zz); zero where J is singular (an empty body).

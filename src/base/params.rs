@@ -82,35 +82,40 @@ impl Default for TimeStep {
 
 /// How gravity and a dynamic body's inertia reach the body (see `Numerics::body_coupling`).
 ///
-/// The flow's vorticity equation has one kinematic viscosity ν = μ/ρ_F, so it moves every
-/// region, the bodies' included, as fluid of density ρ_F. Measured on a sphere (radius 0.1,
-/// h = 1/32) settling at Re ≈ 2e-4 in a periodic unit box, against Hasimoto's Stokes drag
-/// for a cubic array (the steady velocity depends on the density only through ρ_i - ρ_F):
-/// - the paper's form (`Baroclinic` with `interface_acceleration: Eulerian`), which divides by
-///   the local ρ, gives the body the buoyancy ρ_F ln(ρ_i/ρ_F) V g in place of (ρ_i - ρ_F) V g:
-///   30.6% slow at ρ_i = 2 (1 - ln 2 = 30.7%);
-/// - `Baroclinic` with `Rigid` (its default): -8% at ρ_i = 1.1, +13% at 2, and it blows up at
-///   5 (the excess inertia is explicit, lagged by a step); `boussinesq: true`: -10.5% at 1.1,
-///   2 and 5 alike, but with the fluid's inertia for the body;
-/// - `Momentum`: within 1.3% for every density from 0.01 to 20 (-0.8% at 20, +0.9% at 2,
-///   +1.3% at 0.01; +1.7% at 2 and h = 1/48; `tumble validate stokes-settling`), the
-///   excess inertia implicit in the body's own update; stable down to ρ_i = 0.1 ρ_F at
-///   h = 1/64 (0.01 ρ_F blew up there).
-///
-/// At a given h the drag depends on the time step through the diffusion number (with
-/// `Momentum` at h = 1/32: -15% at 0.125, +1% at 0.5, +52% at 2), as it does for fixed bodies.
-///
-/// `Momentum` is not yet the default because the paper's cases were validated with
-/// `Baroclinic`: with `Momentum`, dkt kisses at t = 0.326 but has not tumbled by t = 0.6.
+/// None of the three is right for every density yet (issue 16). Measured on a sphere
+/// (radius 0.1, h = 1/32) settling at Re ≈ 2e-4 in a periodic unit box, against Hasimoto's
+/// Stokes drag for a cubic array, and on a disk (radius 0.05, 12.8 cells per radius, inviscid,
+/// Δt = 5e-4) launched at V0 in still fluid, against the potential-flow V0 ρ_i/(ρ_i + ρ_F):
+/// - `Baroclinic` (the default; the paper's explicit eq. 28, ∂u/∂t lagged a step) with
+///   `interface_acceleration: Eulerian` gives the body the buoyancy ρ_F ln(ρ_i/ρ_F) V g in
+///   place of (ρ_i - ρ_F) V g (30.6% slow at ρ_i = 2); with `Rigid`: -8% at ρ_i = 1.1, +13%
+///   at 2, blow-up at 5 (the excess inertia is lagged by a step);
+/// - `Momentum`: settling within 1.3% from 0.01 to 20, but the flow carries the body's region
+///   as fluid of density ρ_F and the excess inertia is explicit in the rigid update: the
+///   launched disk oscillates and blows up at ρ_i = 0.1, and the paper's DKT does not tumble
+///   by t = 0.6;
+/// - `Pressure` (research): the variable-density projection of `systems/pressure.rs`.
+///   Stable for the launched disk from 0.01 to 1000 with no step-to-step oscillation
+///   (0.564, 0.706, 0.874 of V0 at ρ_i = 1.5, 3, 10 against 0.6, 0.75, 0.909; 0.164 at 0.1
+///   against 0.091: the smoothed band, moved rigidly, adds fluid to the body's mass; at 25.6
+///   cells per radius -4.7%, -3.0% and +41%); settling +3.7%, +0.35%, -3.0%, -9.1% at
+///   ρ_i = 0.5, 1.1, 2, 5; 1000 runs; 0.01 blows up (the explicit viscous correction,
+///   (ρ_P/ρ - 1) ν Δt ∆u, is 99 ν there; without it 0.01 is stable).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum BodyCoupling {
-    /// Gravity through the baroclinic term on the body's interface (paper eq. 28); ū is the
-    /// mean of the flow over the body.
+    /// Gravity through the explicit baroclinic term on the body's interface (paper eq. 28);
+    /// ū is the mean of the flow over the body.
     #[default]
     Baroclinic,
-    /// (M_w + (ρ_i - ρ_F) V) (ū^{n+1} - ū^n) = M_w (ũ - ū^n) + (ρ_i - ρ_F) V g Δt on the rigid
-    /// velocity (and the same with the inertia tensors for the rotation).
+    /// Research variant: (M_w + (ρ_i - ρ_F) V) (ū^{n+1} - ū^n) = M_w (ũ - ū^n) +
+    /// (ρ_i - ρ_F) V g Δt on the rigid velocity (and the same with the inertia tensors for
+    /// the rotation).
     Momentum,
+    /// Research variant: the variable-density projection, ω ← ω + ∇×(δu_pen - β∇φ) with
+    /// ∇·(β∇φ) = ∇·(δu_pen + Δt (ρ_P g - G)β - Δt (u·∇)u + (ρ_P/ρ - 1) ν Δt ∆u), β = 1/ρ;
+    /// ū is the density-weighted mean of the flow over the body (momentum conserving) plus
+    /// the weight of the body's mass beyond the fluid it displaces.
+    Pressure,
 }
 
 /// How the baroclinic term estimates Du/Dt where the density varies.

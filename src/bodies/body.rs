@@ -264,8 +264,14 @@ pub struct BodySurface(pub crate::bodies::surface::SurfaceMesh);
 /// Grid fields made by the bodies.
 #[derive(Resource, Debug, Clone)]
 pub struct BodyFields {
-    /// Density ρ = ρ_F (1 - Σχ_i) + Σ ρ_i χ_i (eq. 19).
+    /// Density ρ = ρ_P (1 - Σχ_i) + Σ ρ_i χ_i (eq. 19), with ρ_P = `rho_phase`.
     pub rho: Vec<f64>,
+    /// The density of the fluid phases alone, ρ_P (without the bodies): ρ_F unless a plugin
+    /// writes a stratification or a second phase here (before the `density` system, e.g. in
+    /// `PhysicsSet::LevelSets`). Gravity acts on it through the pressure projection; a
+    /// body's weight beyond the fluid it displaces, (ρ_i - ρ_P) χ_i g, acts on its rigid
+    /// velocity.
+    pub rho_phase: Vec<f64>,
     /// Σ χ_i.
     pub chi: Vec<f64>,
     /// Union level set max_i φ_i (φ > 0 inside some body); -∞ where no body's patch reaches
@@ -313,6 +319,7 @@ impl BodyFields {
     pub fn new(grid: &Grid, rho_fluid: f64, n_bodies: usize) -> Self {
         BodyFields {
             rho: vec![rho_fluid; grid.len()],
+            rho_phase: vec![rho_fluid; grid.len()],
             chi: vec![0.0; grid.len()],
             phi: vec![f64::NEG_INFINITY; grid.len()],
             du: vec![vec![0.0; grid.len()]; grid.dim],

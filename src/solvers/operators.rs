@@ -131,6 +131,32 @@ impl Spectral {
         self.fft.inverse(None, input, out);
     }
 
+    /// Solves `-Lap_h x = rhs` for the zero-mean `x`, with `Lap_h` the classical 5/7-point
+    /// Laplacian (the constant-coefficient operator; the preconditioner of the
+    /// variable-density pressure solve). The mean of `rhs` is ignored. Uses the solver's own
+    /// complex work buffer; the cached vorticity spectrum is untouched.
+    ///
+    /// Panics if a length is wrong.
+    pub fn solve_laplacian(&mut self, rhs: &[f64], x: &mut [f64]) {
+        assert_eq!(rhs.len(), self.real_len(), "spectral: rhs length");
+        assert_eq!(x.len(), self.real_len(), "spectral: solution length");
+        self.fft.forward(rhs, &mut self.work);
+        let ([_, ny, _], nxh) = self.fft.dims();
+        let [lx, ly, lz] = &self.tab.lap;
+        self.work
+            .par_chunks_mut(nxh)
+            .enumerate()
+            .for_each(|(r, row)| {
+                let (j, k) = (r % ny, r / ny);
+                let lyz = ly[j] + lz[k];
+                for (i, z) in row.iter_mut().enumerate() {
+                    let l = lx[i] + lyz;
+                    *z = if l > 0.0 { *z / l } else { C64::default() };
+                }
+            });
+        self.fft.inverse(None, &mut self.work, x);
+    }
+
     /// Checks the component count and lengths of a vector field.
     fn check_field(&self, f: &[Vec<f64>], comps: usize, what: &str) {
         assert_eq!(
