@@ -21,7 +21,10 @@
 //! collision force to ū_i directly, so the singular force is never differentiated on the
 //! grid). An off-centre contact therefore spins the body.
 //!
-//! ρ_i is the body's own density, so κ is an acceleration scale independent of the material.
+//! ρ_i is the body's own density, so the acceleration κ gives is independent of the material:
+//! about κ (A/V) e^{-d/ε}/d for a band of area A within range and a body of volume V, which
+//! makes κ a length³/time² (not the squared velocity of the 1D model: ζ/ε is a surface
+//! measure), the unit of its scene default C L² max(|g|, U²/ε) (`KappaDefault`).
 //! d is clamped below at ε/20 (overlap cannot make the force infinite) and the force is
 //! dropped beyond d > `range` ε.
 //!
@@ -74,7 +77,8 @@ struct BodyBox {
     /// Radius of a sphere about the centre holding the body.
     radius: f64,
     center: DVec3,
-    kappa: f64,
+    /// The body's own κ (`None`: each pair's default).
+    kappa: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -243,7 +247,7 @@ fn body_boxes(
     let grow = cut + grid.h;
     c.boxes.clear();
     for (entity, body, state, shape, patch, _, points) in bodies {
-        let kappa = states.get(entity).map(|s| s.kappa).unwrap_or(0.0);
+        let kappa = states.get(entity).map_or(Some(0.0), |s| s.kappa);
         let (aabb, radius) = match shape.level_set.bounds() {
             Some((lo, hi)) => {
                 let (plo, phi) = (grid.pos(patch.lo[0], patch.lo[1], patch.lo[2]), {

@@ -30,6 +30,7 @@ fn mass_and_inertia_match_analytic_values() {
     let mut s = sim(r#"Scene(
         domain: (extent: [1.0, 1.0, 1.0], cells: [64, 64, 64]),
         numerics: (dt: Fixed(0.001), end_time: 1.0),
+        contact: (kappa: 1.0),
         bodies: [
             (name: "a_sphere", shape: Sphere(radius: 0.2), position: [0.3, 0.3, 0.3]),
             (name: "b_box", shape: Box(half_extents: [0.1, 0.15, 0.2]), position: [0.7, 0.3, 0.7],

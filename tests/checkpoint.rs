@@ -95,7 +95,7 @@ fn body_bits(b: &BodyState) -> (usize, String, Vec<u64>) {
     v.extend(r.inertia.to_cols_array());
     v.extend(b.hydro.force.to_array());
     v.extend(b.hydro.torque.to_array());
-    v.push(b.contact.kappa);
+    v.push(b.contact.kappa.unwrap_or(f64::NAN));
     v.extend(b.contact.force.to_array());
     v.extend(b.contact.torque.to_array());
     v.push(b.contact.potential);
@@ -215,6 +215,24 @@ fn restart_vacuum_is_bit_for_bit() {
     assert!(b.iter().any(|b| b.free.angular_momentum.is_some()));
     assert!(b.iter().any(|b| b.contact.force.length() > 0.0));
     restart_is_bit_for_bit(VACUUM_3D, 60, 23);
+}
+
+#[test]
+fn restart_with_the_default_kappa_is_bit_for_bit() {
+    // κ left to the scene's default (a body's own κ is stored as NaN then), one body with its
+    // own.
+    let text = VACUUM_3D
+        .replace("    contact: (kappa: 5.0),\n", "")
+        .replace("density: 2.0,", "density: 2.0, kappa: 4.0,");
+    let mut s = sim(&text);
+    for _ in 0..30 {
+        s.step().unwrap();
+    }
+    let b = checkpoint::body_states(&mut s);
+    assert!(b.iter().any(|b| b.contact.kappa.is_none()));
+    assert!(b.iter().any(|b| b.contact.kappa == Some(4.0)));
+    assert!(b.iter().any(|b| b.contact.force.length() > 0.0));
+    restart_is_bit_for_bit(&text, 60, 23);
 }
 
 // ---- Command line ----
@@ -670,7 +688,11 @@ fn bad_checkpoints_are_refused() {
     assert!(e.contains("other.ron"), "{e}");
     let scene_ron = out.join("scene.ron");
     let kept = std::fs::read_to_string(&scene_ron).unwrap();
-    std::fs::write(&scene_ron, kept.replace("kappa: 30.0", "kappa: 20.0")).unwrap();
+    std::fs::write(
+        &scene_ron,
+        kept.replace("kappa: Some(30.0)", "kappa: Some(20.0)"),
+    )
+    .unwrap();
     let e = refused(&good_path, &[], "other scene.ron");
     assert!(e.contains("scene.ron"), "{e}");
     std::fs::write(&scene_ron, kept).unwrap();

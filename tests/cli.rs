@@ -555,9 +555,14 @@ fn overlapping_bodies_exit_2_naming_line_and_bodies() {
             .unwrap();
         assert_eq!(st.status.code(), Some(2));
     }
-    // Touching (1/4 cell apart) is fine.
+    // Touching (1/4 cell apart) is fine (with a κ: nothing in this scene moves, so it has no
+    // scale for the default).
     let scene = d.join("touch.ron");
-    std::fs::write(&scene, cases[0].0.replace("[0.55, 0.5]", "[0.65 , 0.5]")).unwrap();
+    let touching = cases[0]
+        .0
+        .replace("[0.55, 0.5]", "[0.65 , 0.5]")
+        .replace("bodies: [", "contact: (kappa: 1.0),\n    bodies: [");
+    std::fs::write(&scene, touching).unwrap();
     let st = tumble()
         .args(["check", scene.to_str().unwrap()])
         .output()

@@ -161,12 +161,14 @@ pub struct Hydro {
     pub torque: DVec3,
 }
 
-/// Contact state of a body: its default κ, and the contact force and torque the collision
+/// Contact state of a body: its own κ, and the contact force and torque the collision
 /// system found this step (world frame; torque about the χ-centroid).
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 pub struct ContactState {
-    /// This body's contact strength κ (a pair uses the mean of its bodies' values).
-    pub kappa: f64,
+    /// This body's contact strength κ, length³/time²: its `kappa`, else the scene's
+    /// `contact.kappa`; `None` if neither is given, the body then taking each pair's default
+    /// ([`crate::bodies::contact::KappaDefault`]). A pair uses the mean of its bodies' values.
+    pub kappa: Option<f64>,
     /// Contact force on the body this step.
     pub force: DVec3,
     /// Contact torque on the body this step, about its centroid.

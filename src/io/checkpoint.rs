@@ -16,7 +16,8 @@
 //! * the transport's split order, which alternates every step and is stored, not derived;
 //! * every body's [`RigidState`] (pose, velocities, and the volume, χ-centroid and inertia of
 //!   the last step, which the contact system reads before they are recomputed), [`Hydro`],
-//!   [`ContactState`] and [`FreeMotion`] (the angular momentum a body in vacuum carries),
+//!   [`ContactState`] (its own κ written as an f64, NaN for `None`: the body takes each pair's
+//!   scaled default) and [`FreeMotion`] (the angular momentum a body in vacuum carries),
 //!   matched by [`Body::id`]. Level-set patches, density and χ are recomputed from the poses at
 //!   the start of every step; kinematic prescriptions are functions of t;
 //! * the scene as RON text (and the directory its mesh paths are relative to), and where the
@@ -267,7 +268,8 @@ pub struct BodyState {
     pub rigid: RigidState,
     /// Hydrodynamic force and torque of the last step.
     pub hydro: Hydro,
-    /// κ and the contact force, torque and potential of the last step.
+    /// The body's own κ (`None`: each pair's default) and the contact force, torque and
+    /// potential of the last step.
     pub contact: ContactState,
     /// Angular momentum carried in vacuum.
     pub free: FreeMotion,
@@ -576,7 +578,7 @@ pub fn write_to(w: impl Write, sim: &mut Simulation, progress: &RunProgress) -> 
         }
         e.vec3(b.hydro.force)?;
         e.vec3(b.hydro.torque)?;
-        e.f64(b.contact.kappa)?;
+        e.f64(b.contact.kappa.unwrap_or(f64::NAN))?;
         e.vec3(b.contact.force)?;
         e.vec3(b.contact.torque)?;
         e.f64(b.contact.potential)?;
@@ -866,8 +868,9 @@ fn decode(b: &[u8], file: &Path) -> Result<Checkpoint, String> {
             force: d.vec3()?,
             torque: d.vec3()?,
         };
+        let kappa = d.f64()?;
         let contact = ContactState {
-            kappa: d.f64()?,
+            kappa: (!kappa.is_nan()).then_some(kappa),
             force: d.vec3()?,
             torque: d.vec3()?,
             potential: d.f64()?,

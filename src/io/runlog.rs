@@ -52,7 +52,7 @@ impl RunLog {
 }
 
 /// One paragraph summarising a scene for the log: bodies, fluid and the time step policy.
-pub fn scene_summary(scene: &crate::scene::Scene) -> String {
+pub fn scene_summary(scene: &crate::scene::ValidScene) -> String {
     use crate::scene::BodyKind;
     let count = |f: fn(&BodyKind) -> bool| scene.bodies.iter().filter(|b| f(&b.kind)).count();
     let dynamic = count(|k| matches!(k, BodyKind::Dynamic));
@@ -80,7 +80,7 @@ pub fn scene_summary(scene: &crate::scene::Scene) -> String {
             .every
             .map_or("(first and last only)".to_string(), |e| e.to_string()),
         scene.output.formats,
-        scene.contact.kappa
+        crate::io::summary::kappa_in_use(scene)
     )
 }
 

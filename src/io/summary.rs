@@ -68,6 +68,113 @@ pub fn time_step_words(dt: &TimeStep, has_bodies: bool) -> String {
     }
 }
 
+/// `x` to 4 significant digits, without trailing zeros.
+fn sig4(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    let decimals = (3 - x.abs().log10().floor() as i32).max(0) as usize;
+    let t = format!("{x:.decimals$}");
+    if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    }
+}
+
+/// The contact strength κ the scene's pairs use, in words (for `tumble check` and the run
+/// log): the values over every pair a dynamic body is in, and where they come from (the
+/// scene's `contact.kappa`, the bodies' and pairs' own values, the scaled default
+/// C L² max(|g|, U²/ε)).
+pub fn kappa_in_use(scene: &ValidScene) -> String {
+    let cp = crate::sim::build::contact_params(scene, scene.grid().h);
+    let c = &scene.contact;
+    let own: Vec<Option<f64>> = scene.bodies.iter().map(|b| b.kappa.or(c.kappa)).collect();
+    let dynamic = |i: usize| matches!(scene.bodies[i].kind, BodyKind::Dynamic);
+    // Bodies alike for κ (kind, own value, length) give one value per pair of groups.
+    let mut groups: BTreeMap<(bool, Option<u64>, u64), (usize, usize)> = BTreeMap::new();
+    for (i, k) in own.iter().enumerate() {
+        let key = (
+            dynamic(i),
+            k.map(f64::to_bits),
+            cp.default.lengths[i].to_bits(),
+        );
+        groups.entry(key).or_insert((i, 0)).1 += 1;
+    }
+    let mut values: Vec<f64> = Vec::new();
+    let mut default_lengths: Vec<f64> = Vec::new();
+    for (ka, &(a, na)) in &groups {
+        if !ka.0 {
+            continue;
+        }
+        for (kb, &(b, _)) in &groups {
+            if ka == kb && na < 2 {
+                continue;
+            }
+            values.push(cp.unnamed_kappa(a, b, own[a], own[b]));
+            if own[a].is_none() || own[b].is_none() {
+                let l = cp.default.lengths[a].min(cp.default.lengths[b]);
+                default_lengths.push(l);
+            }
+        }
+    }
+    values.extend(
+        cp.pairs
+            .iter()
+            .filter(|p| dynamic(p.0) || dynamic(p.1))
+            .map(|p| p.2),
+    );
+    let distinct = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs());
+        v
+    };
+    let values = distinct(values);
+    let default_lengths = distinct(default_lengths);
+    let mut out = match values.as_slice() {
+        [] => match c.kappa {
+            Some(k) => format!("{} (no dynamic body has a partner)", sig4(k)),
+            None => "none (no dynamic body has a partner)".to_string(),
+        },
+        [k] => sig4(*k),
+        v if v.len() <= 4 => format!(
+            "{} by pair",
+            v.iter().map(|&k| sig4(k)).collect::<Vec<_>>().join(", ")
+        ),
+        v => format!(
+            "{} to {} by pair ({} values)",
+            sig4(v[0]),
+            sig4(v[v.len() - 1]),
+            v.len()
+        ),
+    };
+    if !default_lengths.is_empty() {
+        let d = &cp.default;
+        let ls = match default_lengths.as_slice() {
+            [l] => sig4(*l),
+            v => format!("{} to {}", sig4(v[0]), sig4(v[v.len() - 1])),
+        };
+        let _ = write!(
+            out,
+            " (the default {} L² max(|g|, U²/ε), |g| = {}, U = {}, ε = {}, L = {ls}: the \
+             equivalent radius of the pair's smaller dynamic body)",
+            d.factor,
+            sig4(d.gravity),
+            sig4(d.speed),
+            sig4(d.eps)
+        );
+    }
+    let per_body = scene.bodies.iter().filter(|b| b.kappa.is_some()).count();
+    if per_body > 0 || !cp.pairs.is_empty() {
+        let _ = write!(
+            out,
+            " ({per_body} bodies and {} pairs give their own)",
+            cp.pairs.len()
+        );
+    }
+    out
+}
+
 /// The summary `tumble check` prints, one line per topic.
 pub fn describe(scene: &ValidScene) -> String {
     let g = scene.grid();
@@ -163,7 +270,8 @@ pub fn describe(scene: &ValidScene) -> String {
         let _ = writeln!(
             s,
             "  contact: kappa {}, range eps = {eps}, cut off at {} eps",
-            c.kappa, c.range
+            kappa_in_use(scene),
+            c.range
         );
     }
     // Outputs.

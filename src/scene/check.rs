@@ -60,6 +60,7 @@ pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)
         .check()
         .map_err(|i| i.under(Seg::Key("output")))?;
     let geoms = check_geometry(scene, &grid)?;
+    check_kappa_scale(scene, &grid, &geoms).map_err(|i| i.under(Seg::Key("contact")))?;
     Ok((grid, geoms))
 }
 
@@ -478,6 +479,29 @@ impl BodySpec {
     }
 }
 
+/// A scene that leaves κ to its default needs a scale for it: gravity, or bodies that move
+/// (see [`super::kappa`]).
+fn check_kappa_scale(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> Check {
+    if scene.contact.kappa.is_some() {
+        return Ok(());
+    }
+    let Some((a, b)) = scene.contact.pair_without_kappa(&scene.bodies) else {
+        return Ok(());
+    };
+    if super::kappa::kappa_default(scene, grid, geoms).acceleration() > 0.0 {
+        return Ok(());
+    }
+    fail(
+        &["kappa"],
+        format!(
+            "must be given when gravity is zero, nothing in the scene has a speed and bodies \
+             can touch (`{a}` and `{b}` here): the default, C L² max(|g|, U²/ε), scales with \
+             gravity and with the speeds U of the bodies and the flow; give \
+             `contact: (kappa: ...)` in length³/time² (or per body or per pair)"
+        ),
+    )
+}
+
 fn check_vacuum(scene: &Scene) -> Check {
     if scene.vacuum
         && !scene
@@ -502,11 +526,10 @@ fn check_vacuum(scene: &Scene) -> Check {
 impl Contact {
     /// Check the contact model for a scene with `bodies` (named).
     pub(crate) fn check(&self, bodies: &[BodySpec]) -> Check {
-        if !(self.kappa.is_finite() && self.kappa >= 0.0) {
-            return fail(
-                &["kappa"],
-                format!("must be zero or positive, got {}", self.kappa),
-            );
+        if let Some(k) = self.kappa
+            && !(k.is_finite() && k >= 0.0)
+        {
+            return fail(&["kappa"], format!("must be zero or positive, got {k}"));
         }
         if let Some(e) = self.eps
             && !(e.is_finite() && e > 0.0)
@@ -545,6 +568,36 @@ impl Contact {
             }
         }
         Ok(())
+    }
+
+    /// The first pair of bodies that can touch (one of them dynamic) and has no κ of its own:
+    /// not in `pairs` and at least one of them without `kappa`.
+    fn pair_without_kappa<'a>(&self, bodies: &'a [BodySpec]) -> Option<(&'a str, &'a str)> {
+        if bodies.iter().all(|b| b.kappa.is_some()) {
+            return None;
+        }
+        let named: std::collections::HashSet<(&str, &str)> = self
+            .pairs
+            .iter()
+            .flat_map(|p| {
+                let (a, b) = (p.bodies.0.as_str(), p.bodies.1.as_str());
+                [(a, b), (b, a)]
+            })
+            .collect();
+        for (i, a) in bodies.iter().enumerate() {
+            if !matches!(a.kind, BodyKind::Dynamic) {
+                continue;
+            }
+            for (j, b) in bodies.iter().enumerate() {
+                if i != j
+                    && (a.kappa.is_none() || b.kappa.is_none())
+                    && !named.contains(&(a.name.as_str(), b.name.as_str()))
+                {
+                    return Some((&a.name, &b.name));
+                }
+            }
+        }
+        None
     }
 }
 

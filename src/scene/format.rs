@@ -72,8 +72,9 @@ pub struct BodySpec {
     /// Default: zero.
     #[serde(default)]
     pub angular_velocity: Vec<f64>,
-    /// This body's contact strength κ (velocity², ≥ 0): a pair of bodies uses the mean of
-    /// their two values unless `contact.pairs` names the pair. Default: `contact.kappa`.
+    /// This body's contact strength κ, length³/time² (≥ 0; see `contact.kappa`): a pair of
+    /// bodies uses the mean of their two values unless `contact.pairs` names the pair, a body
+    /// without one taking the pair's default. Default: `contact.kappa`.
     #[serde(default)]
     pub kappa: Option<f64>,
 }
@@ -84,10 +85,26 @@ pub struct BodySpec {
 #[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct Contact {
-    /// Default strength κ of the repulsion for every pair, velocity² (≥ 0; 0 turns contact
-    /// off). The paper uses 30 (2D disk on a wall), 25 (two spheres) and 5 (in vacuum).
-    /// Default: 25.
-    pub kappa: f64,
+    /// Strength κ of the repulsion for every pair, length³/time² (≥ 0; 0 turns contact off).
+    /// The paper's 1D model ẍ = (κ/x) e^{-x/ε} makes κ a squared velocity, but spread over a
+    /// body's surface (ζ/ε is a surface measure) and divided by its mass, the force gains a
+    /// length: a body's acceleration is κ times an area over a volume times e^{-d/ε}/d, so κ
+    /// scales as length³/time² (a scene rewritten in cm from m needs κ × 10⁶). The paper's
+    /// values, in its cgs units: 30 (2D disk on a wall), 25 (two spheres), 5 (in vacuum).
+    /// Default: made of the scene's own scales, so the same scene in other units moves the
+    /// same: κ = C L² max(|g|, U²/ε) for each pair, with L the equivalent radius (of the disk
+    /// or ball of the same area or volume) of the pair's smaller dynamic body (static,
+    /// kinematic and unbounded bodies do not count: against a wall a body uses its own; a pair
+    /// without a bounded dynamic body gets 0), C = 3 in 3D and 2 in 2D, g the gravity, U the
+    /// fastest a body can meet another (initial speeds of the dynamic and kinematic bodies,
+    /// plus with the flow on the background velocity and the initial vortices' speeds, plus in
+    /// vacuum the speed of a fall from the body's start to the bottom of the domain) and ε the
+    /// contact range. With |g| a resting body holds its weight at a gap of about ε/2; with
+    /// U²/ε a body arriving at speed U stops about ε short. The paper's cases in fluid come out at their own values (2D disk
+    /// of radius 0.125, g = 980: 30.6 against 30; spheres of radius 0.083: 20.3 against 25).
+    /// A scene without gravity or any speed has no scale: it must give κ if a dynamic body can
+    /// touch another body.
+    pub kappa: Option<f64>,
     /// Range ε of the repulsion, length (> 0). Default: the grid spacing h.
     pub eps: Option<f64>,
     /// Distance beyond which the force is dropped, in units of ε (≥ 2; e^{-6}/6 ≈ 4e-4 of the
@@ -100,7 +117,7 @@ pub struct Contact {
 impl Default for Contact {
     fn default() -> Self {
         Contact {
-            kappa: 25.0,
+            kappa: None,
             eps: None,
             range: 6.0,
             pairs: Vec::new(),
@@ -114,7 +131,7 @@ impl Default for Contact {
 pub struct ContactPair {
     /// The names of the two bodies.
     pub bodies: (String, String),
-    /// Strength κ for this pair, velocity² (≥ 0).
+    /// Strength κ for this pair, length³/time² (≥ 0; see `contact.kappa`).
     pub kappa: f64,
 }
 

@@ -6,6 +6,7 @@ use super::check::check_scene;
 use super::error::{SceneError, offset_of, path_at};
 use super::format::Scene;
 use crate::base::grid::Grid;
+use crate::bodies::contact::KappaDefault;
 use crate::bodies::shapes::ShapeGeometry;
 use std::path::Path;
 
@@ -36,6 +37,12 @@ impl ValidScene {
     /// The bodies' shapes (meshes read), in the order of `bodies`.
     pub fn geometries(&self) -> &[ShapeGeometry] {
         &self.geoms
+    }
+
+    /// The default κ of its pairs (used where neither `contact.kappa` nor the bodies give
+    /// one), see [`crate::scene::kappa`].
+    pub fn kappa_default(&self) -> KappaDefault {
+        super::kappa::kappa_default(&self.scene, &self.grid, &self.geoms)
     }
 
     /// The file the scene was read from (as named in errors).

@@ -53,6 +53,7 @@ pub fn contact_params(scene: &ValidScene, h: f64) -> ContactParams {
         range: scene.contact.range,
         pairs,
         predict: !scene.vacuum,
+        default: scene.kappa_default(),
     }
 }
 
@@ -132,7 +133,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             patch,
             Hydro::default(),
             ContactState {
-                kappa: spec.kappa.unwrap_or(scene.contact.kappa),
+                kappa: spec.kappa.or(scene.contact.kappa),
                 ..Default::default()
             },
             FreeMotion::default(),

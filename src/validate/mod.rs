@@ -1193,7 +1193,7 @@ fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentatio
         scene.domain.h = Some(h);
         scene.domain.cells = None;
         scene.numerics.dt = crate::scene::TimeStep::Fixed(dt);
-        scene.contact.kappa = kappa;
+        scene.contact.kappa = Some(kappa);
     })?;
     let r = 0.125;
     let mut sim = Simulation::new(scene)?;
