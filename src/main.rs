@@ -376,10 +376,18 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
     }
     let mut total = Vec::with_capacity(steps);
     let mut per: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    // Iterations of the variable-density pressure solve per timed step (when it runs).
+    let mut iterations = Vec::new();
     for _ in 0..steps {
         let t0 = std::time::Instant::now();
         sim.step()?;
         total.push(t0.elapsed().as_secs_f64());
+        if let Some(p) = sim
+            .world
+            .get_resource::<tumble::systems::pressure::PressureSolver>()
+        {
+            iterations.push(p.iterations as f64);
+        }
         for &(n, s) in &sim.timings().last {
             match per.iter_mut().find(|e| e.0 == n) {
                 Some(e) => e.1.push(s),
@@ -393,7 +401,7 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
         systems.insert(n.to_string(), serde_json::json!(median_p90(&mut v).0));
     }
     let g = sim.grid();
-    let line = serde_json::json!({
+    let mut line = serde_json::json!({
         "scene": name,
         "cells": g.len(),
         "grid": &g.n[..g.dim],
@@ -405,6 +413,9 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
         "median_s_per_system": systems,
         "peak_memory_bytes": peak_memory_bytes(),
     });
+    if !iterations.is_empty() {
+        line["median_pressure_iterations"] = serde_json::json!(median_p90(&mut iterations).0);
+    }
     Ok(line.to_string())
 }
 
