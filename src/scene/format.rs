@@ -216,9 +216,9 @@ pub struct Numerics {
     /// fluid's act on its rigid velocity directly, (M_w + (ρ_i - ρ_F) V) Δū = M_w (ũ - ū) +
     /// (ρ_i - ρ_F) V g Δt, with ũ the mean of the flow over the region the penalization moves
     /// and M_w that region's fluid mass; the flow carries the fluid's density everywhere, as
-    /// its vorticity equation (one ν = μ/ρ_F) assumes. `Momentum` settles at the right
-    /// velocity for any density and stays stable for heavy bodies, see [`BodyCoupling`].
-    /// Default: Baroclinic.
+    /// its vorticity equation (one ν = μ/ρ_F) assumes. `Pressure` (research): the
+    /// variable-density projection of `systems/pressure.rs`. `Momentum` and `Pressure` are
+    /// research variants with measured defects, see [`BodyCoupling`]. Default: Baroclinic.
     pub body_coupling: BodyCoupling,
     /// Use the Boussinesq form of the baroclinic term, ∇ρ × g / ρ_F (eq. 18), instead of the
     /// full form (eq. 28); with `body_coupling: Baroclinic`. Default: false.
