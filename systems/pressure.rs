@@ -10,29 +10,30 @@
 //!
 //! The transport and diffusion systems and the Biot-Savart solve carry the flow as if its
 //! density were uniform: together they make u + Δt P(-(u·∇)u + ν∆u), with P the
-//! constant-density projection. This system adds the rest, so that a step makes
-//! u + P_ρ(δu_pen + Δt(-(u·∇)u + (ρ_P/ρ) ν∆u + (ρ_P g - G)/ρ)), with P_ρ the projection of the
-//! density ρ, δu_pen the velocity change of this step's implicit penalization (eq. 13) and
-//! ρ_P the density of the fluid phases alone:
+//! constant-density projection. This system adds what a density ρ changes, P_ρ being the
+//! projection of the density ρ, δu_pen the velocity change of this step's implicit
+//! penalization (eq. 13) and ρ_P the density of the fluid phases alone:
 //!
-//! ∇·(β∇φ) = ∇·(δu_pen + Δt (ρ_P g - G) β - Δt (u·∇)u + (ρ_P/ρ - 1) ν Δt ∆u),  β = 1/ρ,
-//! ω ← ω + ∇×(δu_pen + Δt (ρ_P g - G) β + (ρ_P/ρ - 1) ν Δt ∆u - β∇φ)
+//! ∇·(β∇φ) = ∇·(δu_pen + Δt (ρ_P g - G) β - Δt (u·∇)u),  β = 1/ρ,
+//! ω ← ω + ∇×(δu_pen + Δt (ρ_P g - G) β - β∇φ)
 //!
-//! (φ = Δt p). P_ρ conserves the momentum ∫ρu, so a body takes its added mass from the same
-//! solve at any density ratio, and its rigid velocity is the density-weighted mean of the
-//! flow over it (`rigid_velocity`), which also adds the weight of the body's mass beyond the
-//! fluid it displaces, ∫(ρ_i - ρ_P)χ_i g: a force spread over the region the penalization
-//! moves rigidly. (Spread as (ρ - ⟨ρ⟩) g over χ instead, a sphere at Re ≪ 1 settled 11% slow
-//! at every density: the part of the rigid band outside χ took the backflow of the
-//! projection into the body.)
+//! (φ = Δt p; the advection is in the source but not in the increment: transport makes it).
+//! P_ρ conserves the momentum ∫ρu, so a body takes its added mass from the same solve at any
+//! density ratio.
 //!
-//! Viscous term: the diffusion system applies ν∆u to every region, while the viscous
-//! acceleration of a fluid of uniform dynamic viscosity ρ_P ν is (ρ_P/ρ) ν∆u; the difference,
-//! in a heavy body, is momentum from nothing (a sphere of density 2 settled 28% slow without
-//! the correction). Last step's implicit diffusion changed the velocity by exactly
-//! ν Δt_prev ∆_h u^n (the same 5/7-point symbol), with u^n this step's velocity before the
-//! penalization, so the correction uses that. It is explicit: with ρ_P/ρ ≫ 1 (a body lighter
-//! than a tenth of the fluid) it is unstable.
+//! The bodies (`rigid_velocity`): a body's velocity is the density-weighted mean over the
+//! region its penalization moves of v = ũ + (ρ_P/ρ)(u - ũ), where ũ is the velocity the last
+//! step ended with here (`PressureState::trial`) and u the flow's now: the body's mass beyond
+//! the fluid's keeps the velocity the projection gave it, and the flow's change since then
+//! (transport, diffusion, the velocity solve) acts on the fluid's share. That is the viscous
+//! force of a fluid of dynamic viscosity ρ_P ν on the body. (With the plain mean of u, the
+//! diffusion's ν∆u acted on the whole mass: a sphere of density 2 settled 28% slow; with an
+//! explicit correction (ρ_P/ρ - 1) ν Δt ∆u the error still grew with the density, -9% at 5,
+//! and a body of density 0.01 blew up.) The weight of the body's mass beyond the fluid it
+//! displaces, ∫(ρ_i - ρ_P)χ_i g, is added to that velocity, a force spread over the region
+//! the penalization moves rigidly. (Spread as (ρ - ⟨ρ⟩) g over χ instead, a sphere at Re ≪ 1
+//! settled 11% slow at every density: the part of the rigid band outside χ took the
+//! backflow of the projection into the body.)
 //!
 //! The hydrostatic part of p is not periodic: p = G·x + p' with G = ⟨ρ_P⟩ g, the mean weight
 //! of the fluid phases, carried by the mean pressure gradient. Only p' is solved for.
@@ -46,9 +47,9 @@
 //!
 //! Solver: conjugate gradients on -∇·(β∇), preconditioned by the inverse of the
 //! constant-coefficient 5/7-point Laplacian (one real FFT pair, exact when ρ is uniform) and
-//! warm-started from the last step's φ, to a relative residual of 1e-9. Iterations measured:
-//! 2 at density ratio 1.1, 6 at 2, 12 at 5, 30 at 10, 84 at 0.01, about 115 at 1000 (3D,
-//! 32³). Dot products are summed row by row in a fixed order, so the result does not depend
+//! warm-started from the last step's φ, to a relative residual of 1e-9. Iterations measured
+//! (3D, 32³, a sphere): 2 at density ratio 1.1, 6 at 2, 11 at 5, 36 at 0.01, about 146 at
+//! 1000. Dot products are summed row by row in a fixed order, so the result does not depend
 //! on the thread count.
 
 use crate::base::fields::{Fields, Params, SimTime};
@@ -64,18 +65,27 @@ pub const TOLERANCE: f64 = 1e-9;
 /// Iteration cap of the pressure solve (a warning is logged if it is reached).
 pub const MAX_ITERATIONS: usize = 2000;
 
+/// What the pressure projection carries from one step to the next (checkpointed): the last
+/// potential (the warm start) and the velocity the last step ended with before transport
+/// and diffusion.
+#[derive(Resource, Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+pub struct PressureState {
+    /// Δt p' of the last solve (periodic part), per node.
+    pub phi: Vec<f64>,
+    /// The velocity the last step ended with before transport and diffusion, u + the
+    /// projected increments, per component: at the next step's `rigid_velocity` a body's
+    /// mass beyond the fluid's takes its velocity from it.
+    pub trial: Vec<Vec<f64>>,
+}
+
 /// The pressure solver's state and scratch: φ = Δt p' of the last step (the warm start), the
 /// face coefficients and the conjugate-gradient vectors. Allocated once.
 #[derive(Resource, Debug, Clone)]
 pub struct PressureSolver {
-    /// Δt p' of the last solve (periodic part), per node.
-    pub phi: Vec<f64>,
     /// β = 1/ρ on the face between node i and node i + e_a, stored at i, per axis.
     beta: Vec<Vec<f64>>,
     /// The velocity increment to project, per node and component (scratch).
     src: Vec<Vec<f64>>,
-    /// The viscous correction (ρ_F/ρ - 1) ν Δt ∆u, per node and component (scratch).
-    vis: Vec<Vec<f64>>,
     r: Vec<f64>,
     z: Vec<f64>,
     p: Vec<f64>,
@@ -97,10 +107,8 @@ impl PressureSolver {
     pub fn new(grid: &Grid) -> Self {
         let n = grid.len();
         PressureSolver {
-            phi: vec![0.0; n],
             beta: vec![vec![0.0; n]; grid.dim],
             src: vec![vec![0.0; n]; grid.dim],
-            vis: vec![vec![0.0; n]; grid.dim],
             r: vec![0.0; n],
             z: vec![0.0; n],
             p: vec![0.0; n],
@@ -176,10 +184,14 @@ fn mean(partial: &mut [f64], nx: usize, a: &[f64]) -> f64 {
 
 /// Solves A φ = b (A = -h²∇·(β∇)) by preconditioned conjugate gradients from the φ it holds.
 /// Returns (iterations, relative residual).
-fn solve(grid: &Grid, s: &mut PressureSolver, spectral: &mut Spectral) -> (usize, f64) {
+fn solve(
+    grid: &Grid,
+    s: &mut PressureSolver,
+    phi: &mut [f64],
+    spectral: &mut Spectral,
+) -> (usize, f64) {
     let nx = grid.n[0];
     let PressureSolver {
-        phi,
         beta,
         r,
         z,
@@ -244,6 +256,7 @@ fn solve(grid: &Grid, s: &mut PressureSolver, spectral: &mut Spectral) -> (usize
 }
 
 /// The pressure system.
+#[allow(clippy::too_many_arguments)]
 pub fn pressure(
     grid: Res<Grid>,
     params: Res<Params>,
@@ -251,8 +264,10 @@ pub fn pressure(
     mut fields: ResMut<Fields>,
     mut bf: ResMut<BodyFields>,
     mut solver: ResMut<PressureSolver>,
+    mut state: ResMut<PressureState>,
     mut spectral: ResMut<Spectral>,
 ) {
+    let state = &mut *state;
     let dt = time.dt;
     let dim = grid.dim;
     let [nx, ny, _] = grid.n;
@@ -283,37 +298,23 @@ pub fn pressure(
     // viscous correction (ρ_F/ρ - 1) ν Δt ∆u: the diffusion system applies ν∆u to every
     // region, while the viscous acceleration of a uniform dynamic viscosity μ = ρ_F ν is
     // (ρ_F/ρ) ν ∆u (the form that conserves momentum; inside a rigid body ∆u = 0).
-    // The diffusion of the last step was implicit Euler with the same 5/7-point Laplacian,
-    // so the velocity change it made is exactly ν Δt_prev ∆_h u^n, with u^n this step's
-    // velocity before the penalization (u - δu_pen).
-    let nu_dt = params.nu * fields.dt_prev;
     {
         let u = &fields.u;
         let du = &bf.du;
         let inv2h = 0.5 / h;
-        let inv_h2 = 1.0 / (h * h);
         let src = crate::base::grid::component_ptrs(&mut solver.src);
-        let vis = crate::base::grid::component_ptrs(&mut solver.vis);
         (0..grid.len() / nx).into_par_iter().for_each(|row| {
             let (j, k) = (row % ny, row / ny);
             for i in 0..nx {
                 let c = i + nx * row;
                 let nbs = neighbours(&grid, i, j, k);
-                let visc = phase[c] / rho[c] - 1.0;
                 for q in 0..dim {
                     let mut adv = 0.0;
-                    let mut lap = 0.0;
                     for (b, &(m, p)) in nbs.iter().enumerate().take(dim) {
                         adv += u[b][c] * (u[q][p] - u[q][m]) * inv2h;
-                        let un = |n: usize| u[q][n] - du[q][n];
-                        lap += (un(p) - 2.0 * un(c) + un(m)) * inv_h2;
                     }
-                    let v = visc * nu_dt * lap;
                     // SAFETY: node c belongs to this row only.
-                    unsafe {
-                        vis[q].write(c, v);
-                        src[q].write(c, du[q][c] - dt * adv + v);
-                    }
+                    unsafe { src[q].write(c, du[q][c] - dt * adv) };
                 }
             }
         });
@@ -343,7 +344,7 @@ pub fn pressure(
                 }
             });
     }
-    let (it, res) = solve(&grid, solver, &mut spectral);
+    let (it, res) = solve(&grid, solver, &mut state.phi, &mut spectral);
     if it >= MAX_ITERATIONS {
         tracing::warn!(
             "pressure solve: relative residual {res:.2e} after {it} iterations (asked {TOLERANCE:.0e})"
@@ -353,11 +354,13 @@ pub fn pressure(
     solver.residual = res;
     solver.total_iterations += it as u64;
     solver.solves += 1;
-    // δ = δu_pen + the viscous correction + face-to-node mean of Δt (g - G β) - β ∇φ (the
-    // advection is not part of it: transport makes it); then ω += ∇×δ.
+    // δ = δu_pen + face-to-node mean of Δt (ρ_P g - G) β - β ∇φ (the advection is not part
+    // of it: transport makes it); then ω += ∇×δ.
     {
-        let (phi, beta, vis) = (&solver.phi, &solver.beta, &solver.vis);
+        let (phi, beta) = (&state.phi, &solver.beta);
         let phase = &bf.rho_phase;
+        let u = &fields.u;
+        let trial = crate::base::grid::component_ptrs(&mut state.trial);
         let du = crate::base::grid::component_ptrs(&mut bf.du);
         let inv_h = 1.0 / h;
         (0..grid.len() / nx).into_par_iter().for_each(|row| {
@@ -372,7 +375,10 @@ pub fn pressure(
                     };
                     let corr = 0.5 * (face(m, c) + face(c, p));
                     // SAFETY: node c belongs to this row only.
-                    unsafe { du[a].write(c, du[a].read(c) + vis[a][c] + corr) };
+                    unsafe {
+                        du[a].write(c, du[a].read(c) + corr);
+                        trial[a].write(c, u[a][c] + corr);
+                    }
                 }
             }
         });
@@ -396,8 +402,13 @@ impl crate::schedule::Plugin for PressurePlugin {
         let coupling = ctx.world.resource::<Params>().body_coupling;
         if mode.fluid() && mode.has_bodies() && coupling == BodyCoupling::Pressure {
             ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
-            let s = PressureSolver::new(ctx.world.resource::<Grid>());
-            ctx.insert_resource(s);
+            let grid = ctx.world.resource::<Grid>().clone();
+            ctx.insert_resource(PressureSolver::new(&grid));
+            ctx.insert_resource(PressureState {
+                phi: vec![0.0; grid.len()],
+                trial: vec![vec![0.0; grid.len()]; grid.dim],
+            });
+            ctx.checkpoint_resource::<PressureState>("pressure", 1)?;
             ctx.add_system(PhysicsSet::Baroclinic, "pressure", pressure)?;
         }
         Ok(())

@@ -173,6 +173,7 @@ pub fn mass_properties(
 }
 
 /// The rigid-velocity system.
+#[allow(clippy::too_many_arguments)]
 pub fn rigid_velocity(
     grid: Res<Grid>,
     params: Res<Params>,
@@ -181,10 +182,29 @@ pub fn rigid_velocity(
     bf: Res<BodyFields>,
     mut sums: ResMut<BodySums>,
     mut bodies: Query<(&Body, &GridPatch, &Material, &mut RigidState, &mut Hydro)>,
+    mut pressure_state: Option<ResMut<crate::systems::pressure::PressureState>>,
 ) {
     let momentum = params.body_coupling == BodyCoupling::Momentum;
     let pressure = params.body_coupling == BodyCoupling::Pressure;
     let rho = &bf.rho;
+    // Under the pressure projection the body's mass beyond the fluid's, (ρ - ρ_P), keeps the
+    // velocity the last step's projection gave it (`trial`), while the flow's change since
+    // then (transport, diffusion, the velocity solve) acts on the fluid's share ρ_P, as the
+    // viscous force of a fluid of dynamic viscosity ρ_P ν does: v = trial + (ρ_P/ρ)(u - trial),
+    // whose density-weighted mean is the body's velocity.
+    let blended: Option<&[Vec<f64>]> = match pressure_state.as_deref_mut() {
+        Some(ps) if pressure && fields.dt_prev > 0.0 => {
+            let u = &fields.u;
+            let phase = &bf.rho_phase;
+            for (q, t) in ps.trial.iter_mut().enumerate() {
+                t.par_iter_mut().enumerate().for_each(|(g, t)| {
+                    *t += phase[g] / rho[g] * (u[q][g] - *t);
+                });
+            }
+            Some(&ps.trial)
+        }
+        _ => None,
+    };
     let g = DVec3::from_array(params.gravity);
     for (body, patch, mat, mut state, mut hydro) in &mut bodies {
         if body.is_static() {
@@ -209,7 +229,7 @@ pub fn rigid_velocity(
             &grid,
             patch,
             state.center,
-            &fields.u,
+            blended.unwrap_or(&fields.u),
             &mut sums,
             |c, _, g| {
                 let w = ldt * c / (1.0 + ldt * c);

@@ -182,6 +182,18 @@ fn restart_is_bit_for_bit(text: &str, n: usize, m: usize) {
 }
 
 #[test]
+fn restart_2d_pressure_coupling_is_bit_for_bit() {
+    // The variable-density projection carries its warm start and the velocity each step
+    // ends with (a body's excess mass takes its velocity from it) across the restart.
+    let text = BOX_2D.replace(
+        "end_time: 0.3),",
+        "end_time: 0.3, body_coupling: Pressure),",
+    );
+    assert!(text.contains("Pressure"));
+    restart_is_bit_for_bit(&text, 30, 13);
+}
+
+#[test]
 fn restart_2d_bodies_contact_is_bit_for_bit() {
     // The disk is in contact with the floor, so the restart lands mid-contact.
     let mut s = sim(BOX_2D);
