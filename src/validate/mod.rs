@@ -219,6 +219,60 @@ pub const CASES: &[Case] = &[
         known_failures: &[],
     },
     Case {
+        name: "added-mass",
+        description: "a disk (2D) and a sphere (3D) launched at V0 in still inviscid fluid with body_coupling: Pressure: the velocity six steps later within 3% of the potential-flow V0 rho_s/(rho_s + C_m rho_F) (C_m = 1 disk, 1/2 sphere) for densities 0.1, 1.5, 3 and 10, with no step-to-step oscillation",
+        reference: "potential flow (Lamb, Hydrodynamics, sections 68 and 92)",
+        full: "disk at 25.6 cells per radius (512^2), sphere at 12 cells per radius (96^3)",
+        quick: "disk at 12.8 cells per radius (256^2), sphere at 8 cells per radius (64^3)",
+        full_time: RunTime::Minutes,
+        quick_time: RunTime::Seconds,
+        run: added_mass,
+        known_failures: &[
+            KnownFailure {
+                row: "disk, density 0.1,",
+                quick: true,
+                full: true,
+                why: "the smoothed band the penalization moves rigidly (about 0.87 eps beyond the surface) adds fluid to a light body's mass: +75% at 12.8 cells per radius, +41% at 25.6; issue 16",
+            },
+            KnownFailure {
+                row: "disk, density 1.5,",
+                quick: true,
+                full: true,
+                why: "-6.3% at 12.8 cells per radius, -3.9% at 25.6: the rigid band beyond the surface (first order in eps/R); issue 16",
+            },
+            KnownFailure {
+                row: "disk, density 3,",
+                quick: true,
+                full: true,
+                why: "-5.3% at 12.8 cells per radius, -3.2% at 25.6: the rigid band beyond the surface; issue 16",
+            },
+            KnownFailure {
+                row: "sphere, density 0.1,",
+                quick: true,
+                full: true,
+                why: "+97% at 8 cells per radius, +80% at 12: the rigid band adds fluid to a light body's mass (about 3 x 0.87 eps/R of its volume); issue 16",
+            },
+            KnownFailure {
+                row: "sphere, density 1.5,",
+                quick: true,
+                full: true,
+                why: "-11.4% at 8 cells per radius, -8.0% at 12: the rigid band beyond the surface; issue 16",
+            },
+            KnownFailure {
+                row: "sphere, density 3,",
+                quick: true,
+                full: true,
+                why: "-8.9% at 8 cells per radius, -6.0% at 12: the rigid band beyond the surface; issue 16",
+            },
+            KnownFailure {
+                row: "sphere, density 10,",
+                quick: true,
+                full: false,
+                why: "-3.8% at 8 cells per radius (-2.5% at 12): the rigid band beyond the surface; issue 16",
+            },
+        ],
+    },
+    Case {
         name: "rebound-vacuum",
         description: "three rebounds within 2% of the drop height; smallest gap in [0.1, 3] eps",
         reference: "paper Fig. 1",
@@ -1473,6 +1527,94 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
     rep.notes.push(format!(
         "Re = U a / ν below 2e-3; volume fraction {c:.4}, U_Hasimoto / U_Stokes = {k:.4}"
     ));
+    Ok(rep)
+}
+
+/// One launch: a disk (2D) or sphere (3D) of radius `r` and density `rho` at the centre of a
+/// periodic unit box of `n` cells per side, launched at V0 = 1 in still inviscid fluid with
+/// `body_coupling: Pressure`, Δt = h/4. Returns its velocity after each of `steps` steps.
+fn launch_run(dim: usize, n: usize, r: f64, rho: f64, steps: usize) -> anyhow::Result<Vec<f64>> {
+    let dt = 0.25 / n as f64;
+    let text = if dim == 2 {
+        format!(
+            r#"Scene(
+            name: "added-mass",
+            domain: (extent: [1.0, 1.0], cells: [{n}, {n}]),
+            fluid: (viscosity: 0.0, gravity: [0.0, 0.0]),
+            numerics: (end_time: 1.0, dt: Fixed({dt}), body_coupling: Pressure),
+            bodies: [(name: "disk", shape: Disk(radius: {r}), density: {rho},
+                      position: [0.5, 0.5], velocity: [0.0, 1.0])],
+        )"#
+        )
+    } else {
+        format!(
+            r#"Scene(
+            name: "added-mass",
+            domain: (extent: [1.0, 1.0, 1.0], cells: [{n}, {n}, {n}]),
+            fluid: (viscosity: 0.0, gravity: [0.0, 0.0, 0.0]),
+            numerics: (end_time: 1.0, dt: Fixed({dt}), body_coupling: Pressure),
+            bodies: [(name: "sphere", shape: Sphere(radius: {r}), density: {rho},
+                      position: [0.5, 0.5, 0.5], velocity: [0.0, 0.0, 1.0])],
+        )"#
+        )
+    };
+    let mut sim = Simulation::new(Scene::parse(&text, "added-mass", "added-mass")?)?;
+    let mut v = Vec::with_capacity(steps);
+    for _ in 0..steps {
+        sim.step()?;
+        let st = dynamic_body(&mut sim).ok_or_else(|| anyhow::anyhow!("no body"))?;
+        v.push(if dim == 2 {
+            st.velocity.y
+        } else {
+            st.velocity.z
+        });
+    }
+    Ok(v)
+}
+
+/// A body launched at V0 in still fluid shares its momentum with the fluid it sets moving:
+/// potential flow gives V = V0 ρ_s/(ρ_s + C_m ρ_F), C_m = 1 for a circular cylinder and 1/2
+/// for a sphere. The box is periodic: the disk fills 0.8% of the area and the sphere 0.8% of
+/// the volume, which raises C_m by a few times that fraction (well under 1% of V, inside the
+/// tolerance). The issue asks for 25 cells per radius; the 3D full version runs 12 (96³) to
+/// stay in minutes.
+fn added_mass(quick: bool) -> anyhow::Result<Report> {
+    let mut rep = Report::new("added-mass");
+    let steps = 8;
+    let configs: [(usize, usize, f64, f64, &str); 2] = if quick {
+        [(2, 256, 0.05, 1.0, "disk"), (3, 64, 0.125, 0.5, "sphere")]
+    } else {
+        [(2, 512, 0.05, 1.0, "disk"), (3, 96, 0.125, 0.5, "sphere")]
+    };
+    for (dim, n, r, cm, what) in configs {
+        for rho in [0.1, 1.5, 3.0, 10.0] {
+            let v = launch_run(dim, n, r, rho, steps)?;
+            let theory = rho / (rho + cm);
+            rep.rows.push(Row::rel(
+                format!(
+                    "{what}, density {rho}, {:.1} cells per radius: V / V0 after 6 steps",
+                    r * n as f64
+                ),
+                theory,
+                v[5],
+                0.03,
+            ));
+            // Step-to-step oscillation: two consecutive changes of V of opposite signs, both
+            // above 1e-3 V0 (the old explicit coupling went 1.0, 0.48, 1.06, 0.40, ... at
+            // density 3), over the steps after the first (which imposes the launch).
+            let d: Vec<f64> = v.windows(2).map(|w| w[1] - w[0]).collect();
+            let flips = d
+                .windows(2)
+                .filter(|w| w[0] * w[1] < 0.0 && w[0].abs().min(w[1].abs()) > 1e-3)
+                .count();
+            rep.rows.push(Row::yes_no(
+                format!(
+                    "{what} at density {rho} does not oscillate from step to step ({flips} sign changes of dV above 1e-3 V0)"
+                ),
+                flips == 0,
+            ));
+        }
+    }
     Ok(rep)
 }
 
