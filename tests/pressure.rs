@@ -1,9 +1,11 @@
 //! The variable-density pressure projection (`numerics.body_coupling: Pressure`,
 //! `systems/pressure.rs`) on a density field that is not only bodies: a stratified two-layer
 //! fluid at rest, density ratio 1:10, written into the fluid-phase density `rho_phase` by a
-//! plugin (as a free surface will be), must stay at rest. The hydrostatic balance is exact
-//! only if the gravity term and the pressure gradient are differenced on the same faces with
-//! the same β = 1/ρ; any other pairing makes spurious currents at the density jump.
+//! plugin (as a free surface will be), must stay at rest. (In the vorticity form a correction
+//! that depends on the height alone has no curl, so this fails only on what breaks the
+//! horizontal translation invariance: the solver's stencil, the walls' penalization, the phase
+//! density not reaching the model; `tumble validate stratified-rest` runs the same in 2D and
+//! 3D.)
 
 use bevy_ecs::prelude::*;
 use tumble::base::grid::Grid;
