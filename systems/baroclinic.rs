@@ -75,12 +75,7 @@ pub fn baroclinic(
     let rho = &bf.rho;
     let rho_f = params.rho_fluid;
     let boussinesq = params.boussinesq;
-    let nb = |i: usize, n: usize| {
-        (
-            if i == 0 { n - 1 } else { i - 1 },
-            if i + 1 == n { 0 } else { i + 1 },
-        )
-    };
+    let nb = crate::base::grid::periodic_neighbours;
     let u = std::mem::take(&mut fields.u);
     let u_prev = std::mem::take(&mut fields.u_prev);
     let omega = fields.omega_mut();

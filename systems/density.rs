@@ -1,12 +1,13 @@
 //! # density: characteristic functions and the density field (paper eq. 19)
 //!
-//! ρ = ρ_F (1 - Σ_i χ_i) + Σ_i ρ_i χ_i, with χ_i = H(φ_i) from the level-set system. Static
-//! bodies (walls) count with the fluid's density, so that gravity makes no vorticity at walls.
+//! ρ = ρ_P (1 - Σ_i χ_i) + Σ_i ρ_i χ_i, with χ_i = H(φ_i) from the level-set system and ρ_P
+//! the density of the fluid phases (`BodyFields::rho_phase`: ρ_F unless a plugin writes a
+//! second phase). Static bodies (walls) count with the fluid's density, so that gravity makes
+//! no vorticity at walls.
 //! Also keeps Σχ_i and the union level set max_i φ_i for output, and at each node the body
 //! whose level set is the largest there (its owner, for the baroclinic term). Computed also
 //! at startup, so that the state at t = 0 holds the bodies.
 
-use crate::base::fields::Params;
 use crate::base::grid::Grid;
 use crate::bodies::{Body, BodyFields, GridPatch, Material, NO_BODY};
 use bevy_ecs::prelude::*;
@@ -15,31 +16,21 @@ use rayon::prelude::*;
 /// The density system.
 pub fn density(
     grid: Res<Grid>,
-    params: Res<Params>,
     bodies: Query<(&Body, &Material, &GridPatch)>,
     mut out: ResMut<BodyFields>,
 ) {
-    let rho_f = params.rho_fluid;
-    let pressure = params.body_coupling == crate::base::params::BodyCoupling::Pressure;
     let out = &mut *out;
-    if pressure {
-        let (rho, phase) = (&mut out.rho, &out.rho_phase);
-        rho.par_iter_mut()
-            .zip(phase.par_iter())
-            .for_each(|(r, p)| *r = *p);
-    } else {
-        out.rho.par_iter_mut().for_each(|r| *r = rho_f);
-    }
+    // The fluid phases first (ρ_F everywhere unless a plugin wrote a second phase).
+    let (rho, phase) = (&mut out.rho, &out.rho_phase);
+    rho.par_iter_mut()
+        .zip(phase.par_iter())
+        .for_each(|(r, p)| *r = *p);
     out.chi.par_iter_mut().for_each(|c| *c = 0.0);
     out.phi.par_iter_mut().for_each(|p| *p = f64::NEG_INFINITY);
     out.owner.par_iter_mut().for_each(|o| *o = NO_BODY);
     // Bodies in spawn order, so overlapping patches add up in a fixed order.
     for (body, mat, patch) in &bodies {
-        let drho = if body.is_static() {
-            0.0
-        } else {
-            mat.density - rho_f
-        };
+        let (moving, density) = (!body.is_static(), mat.density);
         let [dx, dy, _] = patch.dims;
         if patch.is_empty() {
             continue;
@@ -60,12 +51,8 @@ pub fn density(
                 let l = r * dx + a;
                 // SAFETY: distinct patch rows map to distinct grid nodes.
                 unsafe {
-                    // ρ_i - ρ_P at this node (ρ_F - ρ_P is 0 without phases).
-                    let d = if pressure && drho != 0.0 {
-                        mat.density - phase[g]
-                    } else {
-                        drho
-                    };
+                    // ρ_i - ρ_P at this node; static bodies count as the fluid around them.
+                    let d = if moving { density - phase[g] } else { 0.0 };
                     rho.write(g, rho.read(g) + d * patch.chi[l]);
                     chi.write(g, chi.read(g) + patch.chi[l]);
                     if patch.phi[l] > phi.read(g) {

@@ -148,12 +148,7 @@ pub fn curl_add(grid: &Grid, a: &[Vec<f64>], omega: &mut [Vec<f64>]) {
     let [nx, ny, nz] = grid.n;
     let inv2h = 0.5 / grid.h;
     let plane = nx * ny;
-    let nb = |i: usize, n: usize| {
-        (
-            if i == 0 { n - 1 } else { i - 1 },
-            if i + 1 == n { 0 } else { i + 1 },
-        )
-    };
+    let nb = crate::base::grid::periodic_neighbours;
     if grid.dim == 2 {
         omega[0]
             .par_chunks_mut(nx)

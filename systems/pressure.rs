@@ -78,8 +78,8 @@ pub struct PressureState {
     pub trial: Vec<Vec<f64>>,
 }
 
-/// The pressure solver's state and scratch: φ = Δt p' of the last step (the warm start), the
-/// face coefficients and the conjugate-gradient vectors. Allocated once.
+/// The pressure solver's scratch: the face coefficients and the conjugate-gradient vectors,
+/// allocated once; and the last solve's iterations and residual.
 #[derive(Resource, Debug, Clone)]
 pub struct PressureSolver {
     /// β = 1/ρ on the face between node i and node i + e_a, stored at i, per axis.
@@ -96,10 +96,6 @@ pub struct PressureSolver {
     pub iterations: usize,
     /// Relative residual reached by the last solve.
     pub residual: f64,
-    /// Total iterations since the start of the run (for the benchmark's mean).
-    pub total_iterations: u64,
-    /// Number of solves since the start of the run.
-    pub solves: u64,
 }
 
 impl PressureSolver {
@@ -116,25 +112,15 @@ impl PressureSolver {
             partial: vec![0.0; n / grid.n[0]],
             iterations: 0,
             residual: 0.0,
-            total_iterations: 0,
-            solves: 0,
         }
     }
-}
-
-/// Periodic neighbours (i - 1, i + 1) of index `i` on an axis of `n` nodes.
-#[inline]
-fn nb(i: usize, n: usize) -> (usize, usize) {
-    (
-        if i == 0 { n - 1 } else { i - 1 },
-        if i + 1 == n { 0 } else { i + 1 },
-    )
 }
 
 /// Index steps along each axis and the node's periodic neighbours below and above it.
 #[inline]
 fn neighbours(grid: &Grid, i: usize, j: usize, k: usize) -> [(usize, usize); 3] {
     let [nx, ny, nz] = grid.n;
+    let nb = crate::base::grid::periodic_neighbours;
     let id = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
     let (im, ip) = nb(i, nx);
     let (jm, jp) = nb(j, ny);
@@ -144,6 +130,15 @@ fn neighbours(grid: &Grid, i: usize, j: usize, k: usize) -> [(usize, usize); 3] 
         (id(i, jm, k), id(i, jp, k)),
         (id(i, j, km), id(i, j, kp)),
     ]
+}
+
+/// The gravity force density on the face between nodes `lo` and `hi = lo + e_a`,
+/// (ρ_P g - G)_a, with ρ_P the mean of the two nodes' phase densities; times the face's β it
+/// is an acceleration (the same β as the operator's, so a fluid whose density varies along g
+/// alone is exactly hydrostatic).
+#[inline]
+fn gravity_face(phase: &[f64], g: [f64; 3], gg: [f64; 3], a: usize, lo: usize, hi: usize) -> f64 {
+    0.5 * (phase[lo] + phase[hi]) * g[a] - gg[a]
 }
 
 /// `out = A x` with A = -∇·(β∇) (compact stencil, periodic), times h².
@@ -294,10 +289,7 @@ pub fn pressure(
     let rho_mean = mean(&mut solver.partial, nx, phase);
     let g = params.gravity;
     let gg: [f64; 3] = std::array::from_fn(|a| g[a] * rho_mean);
-    // The node part of the increment: δu_pen - Δt (u·∇)u (centred differences), and the
-    // viscous correction (ρ_F/ρ - 1) ν Δt ∆u: the diffusion system applies ν∆u to every
-    // region, while the viscous acceleration of a uniform dynamic viscosity μ = ρ_F ν is
-    // (ρ_F/ρ) ν ∆u (the form that conserves momentum; inside a rigid body ∆u = 0).
+    // The node part of the increment: δu_pen - Δt (u·∇)u (centred differences).
     {
         let u = &fields.u;
         let du = &bf.du;
@@ -319,8 +311,8 @@ pub fn pressure(
             }
         });
     }
-    // b = ∇·(face field), face field = mean of the two nodes + Δt (g - G β), times h² (A's
-    // scaling): A φ = -h² b.
+    // b = ∇·(face field), face field = mean of the two nodes + the gravity term, times h²
+    // (A's scaling): A φ = -h² b.
     {
         let (src, beta, phase) = (&solver.src, &solver.beta, &bf.rho_phase);
         solver
@@ -335,8 +327,8 @@ pub fn pressure(
                     let mut div = 0.0;
                     for (a, &(m, p)) in nbs.iter().enumerate().take(dim) {
                         let face = |lo: usize, hi: usize| {
-                            let rp = 0.5 * (phase[lo] + phase[hi]);
-                            0.5 * (src[a][lo] + src[a][hi]) + dt * (rp * g[a] - gg[a]) * beta[a][lo]
+                            0.5 * (src[a][lo] + src[a][hi])
+                                + dt * gravity_face(phase, g, gg, a, lo, hi) * beta[a][lo]
                         };
                         div += face(c, p) - face(m, c);
                     }
@@ -352,8 +344,6 @@ pub fn pressure(
     }
     solver.iterations = it;
     solver.residual = res;
-    solver.total_iterations += it as u64;
-    solver.solves += 1;
     // δ = δu_pen + face-to-node mean of Δt (ρ_P g - G) β - β ∇φ (the advection is not part
     // of it: transport makes it); then ω += ∇×δ.
     {
@@ -370,8 +360,8 @@ pub fn pressure(
                 let nbs = neighbours(&grid, i, j, k);
                 for (a, &(m, p)) in nbs.iter().enumerate().take(dim) {
                     let face = |lo: usize, hi: usize| {
-                        let rp = 0.5 * (phase[lo] + phase[hi]);
-                        (dt * (rp * g[a] - gg[a]) - (phi[hi] - phi[lo]) * inv_h) * beta[a][lo]
+                        (dt * gravity_face(phase, g, gg, a, lo, hi) - (phi[hi] - phi[lo]) * inv_h)
+                            * beta[a][lo]
                     };
                     let corr = 0.5 * (face(m, c) + face(c, p));
                     // SAFETY: node c belongs to this row only.
@@ -386,7 +376,7 @@ pub fn pressure(
     crate::systems::penalization::curl_add(&grid, &bf.du, fields.omega_mut());
 }
 
-/// The variable-density pressure projection (a fluid run with bodies, under the default
+/// The variable-density pressure projection (a fluid run with bodies, under
 /// `body_coupling: Pressure`).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct PressurePlugin;

@@ -245,22 +245,26 @@ pub fn rigid_velocity(
         let w_flow = solve_inertia(grid.dim, j, ang);
         // Before the first step the body has the velocities the scene gives it (the flow
         // inside it does not know them yet): the first penalization imposes them.
+        // Under the pressure projection, this step's impulse of the body's weight beyond the
+        // fluid it displaces (wvol is the body's mass there).
+        let kick = if pressure {
+            let displaced = integrate(
+                &grid,
+                patch,
+                state.center,
+                &fields.u,
+                &mut sums,
+                |c, _, g| bf.rho_phase[g] * c,
+            )
+            .0;
+            (mat.density * state.volume - displaced) * g * time.dt / wvol
+        } else {
+            DVec3::ZERO
+        };
         let first = fields.dt_prev <= 0.0;
         if first {
             *hydro = Hydro::default();
-            if pressure {
-                // The first step's weight beyond buoyancy.
-                let excess = excess_weight(
-                    &grid,
-                    patch,
-                    state.center,
-                    &fields.u,
-                    &mut sums,
-                    mat.density,
-                    &bf.rho_phase,
-                );
-                state.velocity += excess * DVec3::from_array(params.gravity) * time.dt / wvol;
-            }
+            state.velocity += kick;
             continue;
         }
         if pressure {
@@ -268,23 +272,11 @@ pub fn rigid_velocity(
             // the flow has just made, less its weight. (wvol is the body's mass here.)
             let dt = fields.dt_prev;
             let mass = wvol;
-            let g = DVec3::from_array(params.gravity);
             *hydro = Hydro {
                 force: mass * (v_flow - v_prev) / dt - mass * g,
                 torque: wj * (w_flow - w_prev) / dt,
             };
-            state.velocity = v_flow
-                + excess_weight(
-                    &grid,
-                    patch,
-                    state.center,
-                    &fields.u,
-                    &mut sums,
-                    mat.density,
-                    &bf.rho_phase,
-                ) * g
-                    * time.dt
-                    / mass;
+            state.velocity = v_flow + kick;
             state.angular_velocity = w_flow;
             continue;
         }
@@ -320,23 +312,6 @@ pub fn rigid_velocity(
             torque: l_fluid / dt,
         };
     }
-}
-
-/// The body's mass beyond the fluid it displaces, ∫ (ρ_i - ρ_P) χ_i dx (ρ_P the density of
-/// the fluid phases), whose weight acts on its rigid velocity under the pressure projection.
-fn excess_weight(
-    grid: &Grid,
-    patch: &GridPatch,
-    center: DVec3,
-    u: &[Vec<f64>],
-    sums: &mut BodySums,
-    density: f64,
-    phase: &[f64],
-) -> f64 {
-    // Two positive integrals (`integrate` returns 0 for a non-positive weight sum).
-    let volume = integrate(grid, patch, center, u, sums, |c, _, _| c).0;
-    let displaced = integrate(grid, patch, center, u, sums, |c, _, g| phase[g] * c).0;
-    density * volume - displaced
 }
 
 /// J⁻¹ l: in 2D about z only (J_zz); zero where J is singular (an empty body).

@@ -21,51 +21,44 @@ fn drop_heights(dim: usize, scale: f64, contact: &str) -> (Vec<f64>, Option<Stri
     } else {
         (0.5 / 32.0, 0.001)
     };
-    let text = if dim == 2 {
-        format!(
-            r#"Scene(
-            domain: (origin: [0.0, {o}], extent: [{e}, {e}], h: {h}),
-            fluid: (gravity: [0.0, {g}]),
-            vacuum: true,
-            {contact}
-            numerics: (dt: Fixed({dt}), end_time: 0.6),
-            bodies: [
-                (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.0),
-                 kind: Static, position: [{c}, 0.0]),
-                (name: "disk", shape: Disk(radius: {r}), position: [{c}, {y0}]),
-            ],
-        )"#,
-            o = l(-0.0625),
-            e = l(0.5),
-            h = l(h),
-            g = l(-9.81),
-            c = l(0.25),
-            r = l(0.05),
-            y0 = l(0.15),
+    // The 2D and 3D scenes differ only in their vectors and in the body's shape.
+    let (o, e, g, c, y0) = (l(-0.0625), l(0.5), l(-9.81), l(0.25), l(0.15));
+    let (origin, extent, gravity, normal, floor_at, body, at) = if dim == 2 {
+        (
+            format!("[0.0, {o}]"),
+            format!("[{e}, {e}]"),
+            format!("[0.0, {g}]"),
+            "[0.0, 1.0, 0.0]",
+            format!("[{c}, 0.0]"),
+            format!("name: \"disk\", shape: Disk(radius: {})", l(0.05)),
+            format!("[{c}, {y0}]"),
         )
     } else {
-        format!(
-            r#"Scene(
-            domain: (origin: [0.0, 0.0, {o}], extent: [{e}, {e}, {e}], h: {h}),
-            fluid: (gravity: [0.0, 0.0, {g}]),
-            vacuum: true,
-            {contact}
-            numerics: (dt: Fixed({dt}), end_time: 0.6),
-            bodies: [
-                (name: "floor", shape: HalfSpace(normal: [0.0, 0.0, 1.0], offset: 0.0),
-                 kind: Static, position: [{c}, {c}, 0.0]),
-                (name: "ball", shape: Sphere(radius: {r}), position: [{c}, {c}, {y0}]),
-            ],
-        )"#,
-            o = l(-0.0625),
-            e = l(0.5),
-            h = l(h),
-            g = l(-9.81),
-            c = l(0.25),
-            r = l(0.05),
-            y0 = l(0.15),
+        (
+            format!("[0.0, 0.0, {o}]"),
+            format!("[{e}, {e}, {e}]"),
+            format!("[0.0, 0.0, {g}]"),
+            "[0.0, 0.0, 1.0]",
+            format!("[{c}, {c}, 0.0]"),
+            format!("name: \"ball\", shape: Sphere(radius: {})", l(0.05)),
+            format!("[{c}, {c}, {y0}]"),
         )
     };
+    let text = format!(
+        r#"Scene(
+        domain: (origin: {origin}, extent: {extent}, h: {h}),
+        fluid: (gravity: {gravity}),
+        vacuum: true,
+        {contact}
+        numerics: (dt: Fixed({dt}), end_time: 0.6),
+        bodies: [
+            (name: "floor", shape: HalfSpace(normal: {normal}, offset: 0.0),
+             kind: Static, position: {floor_at}),
+            ({body}, position: {at}),
+        ],
+    )"#,
+        h = l(h),
+    );
     let scene = Scene::parse(&text, "drop", "drop").unwrap_or_else(|e| panic!("{e}"));
     let mut sim = Simulation::new(scene).unwrap_or_else(|e| panic!("{e}"));
     sim.set_stop_at(Some(0.6));

@@ -122,3 +122,12 @@ pub fn component_ptrs(field: &mut [Vec<f64>]) -> [SyncPtr<f64>; 3] {
         None => SyncPtr(std::ptr::null_mut()),
     })
 }
+
+/// The periodic neighbours (i - 1, i + 1) of index `i` on an axis of `n` nodes.
+#[inline]
+pub fn periodic_neighbours(i: usize, n: usize) -> (usize, usize) {
+    (
+        if i == 0 { n - 1 } else { i - 1 },
+        if i + 1 == n { 0 } else { i + 1 },
+    )
+}
