@@ -182,27 +182,19 @@ pub fn rigid_velocity(
     bf: Res<BodyFields>,
     mut sums: ResMut<BodySums>,
     mut bodies: Query<(&Body, &GridPatch, &Material, &mut RigidState, &mut Hydro)>,
-    mut pressure_state: Option<ResMut<crate::systems::pressure::PressureState>>,
+    pressure_state: Option<Res<crate::systems::pressure::PressureState>>,
 ) {
     let momentum = params.body_coupling == BodyCoupling::Momentum;
     let pressure = params.body_coupling == BodyCoupling::Pressure;
     let rho = &bf.rho;
+    let phase = &bf.rho_phase;
     // Under the pressure projection the body's mass beyond the fluid's, (ρ - ρ_P), keeps the
-    // velocity the last step's projection gave it (`trial`), while the flow's change since
-    // then (transport, diffusion, the velocity solve) acts on the fluid's share ρ_P, as the
-    // viscous force of a fluid of dynamic viscosity ρ_P ν does: v = trial + (ρ_P/ρ)(u - trial),
-    // whose density-weighted mean is the body's velocity.
-    let blended: Option<&[Vec<f64>]> = match pressure_state.as_deref_mut() {
-        Some(ps) if pressure && fields.dt_prev > 0.0 => {
-            let u = &fields.u;
-            let phase = &bf.rho_phase;
-            for (q, t) in ps.trial.iter_mut().enumerate() {
-                t.par_iter_mut().enumerate().for_each(|(g, t)| {
-                    *t += phase[g] / rho[g] * (u[q][g] - *t);
-                });
-            }
-            Some(&ps.trial)
-        }
+    // momentum the last step's projection gave it (`PressureState::excess`, taken where the
+    // body was then and carried with it), while the flow's change since then (transport,
+    // diffusion, the velocity solve) acts on the fluid's share ρ_P, as the viscous force of
+    // a fluid of dynamic viscosity ρ_P ν does.
+    let excess = match pressure_state.as_deref() {
+        Some(ps) if pressure && fields.dt_prev > 0.0 => Some(&ps.excess),
         _ => None,
     };
     let g = DVec3::from_array(params.gravity);
@@ -225,17 +217,39 @@ pub fn rigid_velocity(
         // Under the pressure projection the flow carries each region with its own density,
         // so the rigid velocity is the density-weighted mean (the penalization then conserves
         // momentum).
-        let (wvol, wcentroid, mom, ang, wj) = integrate(
+        let weight = |c: f64| ldt * c / (1.0 + ldt * c);
+        let (wvol, wcentroid, mut mom, mut ang, wj) = integrate(
             &grid,
             patch,
             state.center,
-            blended.unwrap_or(&fields.u),
+            &fields.u,
             &mut sums,
             |c, _, g| {
-                let w = ldt * c / (1.0 + ldt * c);
-                if pressure { rho[g] * w } else { w }
+                if pressure {
+                    rho[g] * weight(c)
+                } else {
+                    weight(c)
+                }
             },
         );
+        // The excess mass's share: its momentum from the last projection in place of the
+        // flow's now, ∫(ρ - ρ_P) w u (angular momenta about the centroid of ρw).
+        if let Some(Some(e)) = excess.map(|x| x.get(body.id).copied().flatten()) {
+            let (me, xe, pu, lu, _) = integrate(
+                &grid,
+                patch,
+                state.center,
+                &fields.u,
+                &mut sums,
+                |c, _, g| (rho[g] - phase[g]) * weight(c),
+            );
+            if me > 0.0 {
+                let pe = me * e.velocity;
+                let arm = xe - wcentroid;
+                mom += pe - pu;
+                ang += me * e.spin + arm.cross(pe) - (lu + arm.cross(pu));
+            }
+        }
         if wvol <= 0.0 {
             continue;
         }
@@ -254,7 +268,7 @@ pub fn rigid_velocity(
                 state.center,
                 &fields.u,
                 &mut sums,
-                |c, _, g| bf.rho_phase[g] * c,
+                |c, _, g| phase[g] * c,
             )
             .0;
             (mat.density * state.volume - displaced) * g * time.dt / wvol

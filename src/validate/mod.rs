@@ -288,7 +288,7 @@ pub const CASES: &[Case] = &[
                 row: "disk, density 0.1,",
                 quick: true,
                 full: true,
-                why: "the smoothed band the penalization moves rigidly (about 0.87 eps beyond the surface) adds fluid to a light body's mass: +75% at 12.8 cells per radius, +41% at 25.6; issue 16",
+                why: "the smoothed band the penalization moves rigidly (about 0.87 eps beyond the surface) adds fluid to a light body's mass: +79% at 12.8 cells per radius, +41% at 25.6 (before the excess momentum travelled with the body: +75% at 12.8); issue 16",
             },
             KnownFailure {
                 row: "disk, density 1.5,",
