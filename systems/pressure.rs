@@ -417,7 +417,7 @@ pub fn pressure(
             &mut sums,
             |c, _, g| (rho[g] - phase[g]) * ldt * c / (1.0 + ldt * c),
         );
-        state.excess[body.id] = Some(if m > 0.0 {
+        state.excess[body.id] = Some(if m != 0.0 {
             ExcessMomentum {
                 velocity: p / m,
                 spin: l / m,

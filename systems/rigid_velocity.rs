@@ -60,8 +60,8 @@ impl BodySums {
     }
 }
 
-/// Integrals of χ over a body's patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r measured
-/// from the centroid.
+/// Integrals of a weight χ over a body's patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
+/// measured from the centroid; all zero when ∫χ is.
 pub fn integrate(
     grid: &Grid,
     patch: &GridPatch,
@@ -123,7 +123,9 @@ pub fn integrate(
         *v *= dv;
     }
     let vol = t[0];
-    if vol <= 0.0 {
+    // (A weight may be negative: the mass of a body lighter than the fluid beyond the
+    // fluid's.)
+    if vol == 0.0 {
         return (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
     }
     // Shift the moments from the centre c to the centroid x_G = c + d.
@@ -243,7 +245,7 @@ pub fn rigid_velocity(
                 &mut sums,
                 |c, _, g| (rho[g] - phase[g]) * weight(c),
             );
-            if me > 0.0 {
+            if me != 0.0 {
                 let pe = me * e.velocity;
                 let arm = xe - wcentroid;
                 mom += pe - pu;
