@@ -299,7 +299,11 @@ fn spheres_pushed_apart_turn_their_contact_potential_into_kinetic_energy() {
 /// stepped together: two equal spheres meeting head-on at ±1 and parting within one step
 /// exchange their velocities, an impulse of 2m each (elastic, equal masses). Stepping each
 /// against a partner that moves on unaffected would give each the whole relative velocity's
-/// reversal, 4m.
+/// reversal, 4m. The velocities are injected by writing the flow and the rigid states, which
+/// is the whole state of the `Baroclinic` coupling; under the default `Pressure` the momentum
+/// of a body's mass beyond the fluid's is carried in `PressureState`, which the injection does
+/// not set (the measured exchange is then 1.55 instead of 2), so this test of the contact's time
+/// resolution runs with `Baroclinic`.
 #[test]
 fn stiff_head_on_contact_in_a_fluid_step_exchanges_the_right_impulse() {
     let h = 1.0 / 48.0;
@@ -310,7 +314,7 @@ fn stiff_head_on_contact_in_a_fluid_step_exchanges_the_right_impulse() {
         domain: (extent: [1.0, 1.0, 1.0], cells: [48, 48, 48]),
         fluid: (viscosity: 0.01, gravity: [0.0, 0.0, 0.0]),
         contact: (kappa: 25.0),
-        numerics: (dt: Fixed({dt}), end_time: 10.0),
+        numerics: (dt: Fixed({dt}), end_time: 10.0, body_coupling: Baroclinic),
         bodies: [
             (name: "a", shape: Sphere(radius: {r}), density: 1.5, position: [{xa}, 0.5, 0.5]),
             (name: "b", shape: Sphere(radius: {r}), density: 1.5, position: [{xb}, 0.5, 0.5]),

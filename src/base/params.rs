@@ -82,40 +82,39 @@ impl Default for TimeStep {
 
 /// How gravity and a dynamic body's inertia reach the body (see `Numerics::body_coupling`).
 ///
-/// None of the three is right for every density yet (issue 16). Measured on a sphere
-/// (radius 0.1, h = 1/32) settling at Re ≈ 2e-4 in a periodic unit box, against Hasimoto's
-/// Stokes drag for a cubic array, and on a disk (radius 0.05, 12.8 cells per radius, inviscid,
-/// Δt = 5e-4) launched at V0 in still fluid, against the potential-flow V0 ρ_i/(ρ_i + ρ_F):
-/// - `Baroclinic` (the default; the paper's explicit eq. 28, ∂u/∂t lagged a step) with
+/// `Pressure` is the model (issue 16): one variable-density projection carries buoyancy and
+/// added mass for every density ratio. The other two are research variants kept for
+/// comparison. Measured on a sphere (radius 0.1, h = 1/32) settling at Re ≈ 2e-4 in a
+/// periodic unit box, against Hasimoto's Stokes drag for a cubic array (`stokes-settling`),
+/// and on a disk and a sphere launched in still inviscid fluid (`added-mass`):
+/// - `Pressure` (the default): settling +7.9%, +2.4%, -0.6%, -5.9% at ρ_i = 0.01, 0.5, 2, 20;
+///   stable at every ratio tried, 0.001 to 1000, with no step-to-step oscillation. What is
+///   still wrong (issue 16): the drag depends on the diffusion number ν Δt / h² (at density
+///   2: 0.84, 0.99, 1.46 of Hasimoto at 0.125, 0.5, 2), because the no-slip is imposed once
+///   per step; and the smoothed band the penalization moves rigidly (about ε beyond the
+///   surface) adds fluid to the body's mass, which matters for bodies lighter than the fluid
+///   (launched disk at density 0.1: 0.159 of V0 against 0.091).
+/// - `Baroclinic` (research; the paper's explicit eq. 28, ∂u/∂t lagged a step) with
 ///   `interface_acceleration: Eulerian` gives the body the buoyancy ρ_F ln(ρ_i/ρ_F) V g in
 ///   place of (ρ_i - ρ_F) V g (30.6% slow at ρ_i = 2); with `Rigid`: -8% at ρ_i = 1.1, +13%
-///   at 2, blow-up at 5 (the excess inertia is lagged by a step);
-/// - `Momentum`: settling within 1.3% from 0.01 to 20, but the flow carries the body's region
-///   as fluid of density ρ_F and the excess inertia is explicit in the rigid update: the
-///   launched disk oscillates and blows up at ρ_i = 0.1, and the paper's DKT does not tumble
-///   by t = 0.6;
-/// - `Pressure` (research): the variable-density projection of `systems/pressure.rs`.
-///   Settling: +7.9%, +2.3%, +0.6%, -0.6%, -2.5% at ρ_i = 0.01, 0.5, 1.1, 2, 5 (stable at
-///   every ratio tried, 0.01 to 1000), but -19% at 5 with Δt/4 (the no-slip splitting, as
-///   for the others). Launched disk: 0.563, 0.887 of V0 at ρ_i = 1.5, 10 against 0.6, 0.909,
-///   no step-to-step oscillation; 0.162 at 0.1 against 0.091 (the smoothed band the
-///   penalization moves rigidly adds fluid to the body's mass). The paper's cases
-///   (quick tier): sphere-settling, ellipsoid-sphere and tank-pile pass, dkt does not tumble
-///   by t = 0.6 (as with `Momentum`), sedimentation-2d's two grids differ by 6.7%
-///   (5.5% with the default; at a common Δt = 7.5e-4 both differ by 3.9%).
+///   at 2, blow-up at 4 (the excess inertia is lagged by a step).
+/// - `Momentum` (research): settling within 1.3% from 0.01 to 20, but the flow carries the
+///   body's region as fluid of density ρ_F and the excess inertia is explicit in the rigid
+///   update: the launched disk oscillates and blows up at ρ_i = 0.1.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum BodyCoupling {
-    /// Gravity through the explicit baroclinic term on the body's interface (paper eq. 28);
-    /// ū is the mean of the flow over the body.
-    #[default]
+    /// Research variant: gravity through the explicit baroclinic term on the body's
+    /// interface (paper eq. 28); ū is the mean of the flow over the body. Wrong for bodies
+    /// denser than about 2.5 ρ_F.
     Baroclinic,
     /// Research variant: (M_w + (ρ_i - ρ_F) V) (ū^{n+1} - ū^n) = M_w (ũ - ū^n) +
     /// (ρ_i - ρ_F) V g Δt on the rigid velocity (and the same with the inertia tensors for
     /// the rotation).
     Momentum,
-    /// Research variant: the variable-density projection, ω ← ω + ∇×(δu_pen + Δt (ρ_P g -
+    /// The variable-density projection (the default), ω ← ω + ∇×(δu_pen + Δt (ρ_P g -
     /// G)β - β∇φ) with ∇·(β∇φ) = ∇·(δu_pen + Δt (ρ_P g - G)β - Δt (u·∇)u), β = 1/ρ; the
-    /// body's excess mass keeps its velocity between steps and its excess weight acts on ū.
+    /// body's excess mass keeps its momentum between steps and its excess weight acts on ū.
+    #[default]
     Pressure,
 }
 

@@ -209,23 +209,22 @@ pub struct Numerics {
     /// Dynamic bodies always use the centred χ = H_ε(φ). In [0, 2 interface_cells].
     /// Default: 0.
     pub penalization_offset: f64,
-    /// How gravity and a dynamic body's own inertia reach the body. `Baroclinic` (default, the
-    /// paper's): gravity makes vorticity on the body's interface (eq. 28, in the form
-    /// `boussinesq` and `interface_acceleration` choose) and ū is the flow's mean over the body.
-    /// `Momentum`: the body's buoyancy (ρ_i - ρ_F) V g and the inertia of its mass beyond the
-    /// fluid's act on its rigid velocity directly, (M_w + (ρ_i - ρ_F) V) Δū = M_w (ũ - ū) +
-    /// (ρ_i - ρ_F) V g Δt, with ũ the mean of the flow over the region the penalization moves
-    /// and M_w that region's fluid mass; the flow carries the fluid's density everywhere, as
-    /// its vorticity equation (one ν = μ/ρ_F) assumes. `Pressure` (research): the
-    /// variable-density projection of `systems/pressure.rs`. `Momentum` and `Pressure` are
-    /// research variants with measured defects, see [`BodyCoupling`]. Default: Baroclinic.
+    /// How gravity and a dynamic body's own inertia reach the body. `Pressure` (the
+    /// default, and the model for every density): the variable-density projection of
+    /// `systems/pressure.rs` gives buoyancy, pressure forces and added mass at any density
+    /// ratio, and the body's rigid velocity is the density-weighted mean of the flow over it.
+    /// `Baroclinic` (research, the paper's): gravity makes vorticity on the body's interface
+    /// (eq. 28, in the form `boussinesq` and `interface_acceleration` choose) and ū is the
+    /// flow's mean over the body; wrong for bodies denser than about 2.5 ρ_F. `Momentum`
+    /// (research): the body's buoyancy and excess inertia act on its rigid velocity directly.
+    /// Measurements of all three in [`BodyCoupling`]. Default: Pressure.
     pub body_coupling: BodyCoupling,
     /// Use the Boussinesq form of the baroclinic term, ∇ρ × g / ρ_F (eq. 18), instead of the
-    /// full form (eq. 28); with `body_coupling: Baroclinic`. Default: false.
+    /// full form (eq. 28); only with `body_coupling: Baroclinic`. Default: false.
     pub boussinesq: bool,
     /// The fluid acceleration Du/Dt on the bodies' interfaces in the baroclinic term (eq. 28):
     /// `Rigid`, the acceleration of the body's rigid motion (no slip), or `Eulerian`, the grid
-    /// estimate ∂u/∂t + (u·∇)u from the last two velocity fields (the paper's); with
+    /// estimate ∂u/∂t + (u·∇)u from the last two velocity fields (the paper's); only with
     /// `body_coupling: Baroclinic`. Default: Rigid.
     pub interface_acceleration: InterfaceAcceleration,
     /// Unsupported numerical variants kept for experiments: no bundled scene, validation case
@@ -276,7 +275,7 @@ impl Default for Numerics {
             lambda: 1e6,
             interface_cells: 1.0,
             penalization_offset: 0.0,
-            body_coupling: BodyCoupling::Baroclinic,
+            body_coupling: BodyCoupling::default(),
             boussinesq: false,
             interface_acceleration: InterfaceAcceleration::Rigid,
             experimental: Experimental::default(),

@@ -174,7 +174,7 @@ pub const CASES: &[Case] = &[
             row: "max fall velocity, finer grid against coarser",
             quick: true,
             full: false,
-            why: "the quick grids (h = 1/64 and 1/96, 8 and 12 cells per radius) are far from the range of the paper's 2% (h = 1/256 against 1/384, where the full case measures 1.9%): 5.5% here; issue 16 re-derives this case under its new coupling",
+            why: "the quick grids (h = 1/64 and 1/96, 8 and 12 cells per radius) refine h and dt together far from the range of the paper's 2% (h = 1/256 against 1/384, where the full case measured 1.9% with Baroclinic): 6.7% here under Pressure (10.92 and 11.66; Baroclinic 5.5%); at a common dt = 7.5e-4 the two grids differ by 3.9% under either coupling; issue 16",
         }],
     },
     Case {
@@ -238,19 +238,19 @@ pub const CASES: &[Case] = &[
                 row: "h = 1/32, Δt: velocity jump at a step shortened",
                 quick: true,
                 full: false,
-                why: "1.6% in the one shortened step (0.1% asked): the drag depends on the step length (no-slip imposed once per step); issue 16",
+                why: "1.1% in the one shortened step (0.1% asked): the drag depends on the step length (no-slip imposed once per step); issue 16",
             },
             KnownFailure {
                 row: "h = 1/32: U(t = 1.2) at Δt/2",
                 quick: true,
                 full: false,
-                why: "1.226 against 1.341 at Δt (-8.6%): the drag depends on ν Δt / h²; issue 16",
+                why: "1.2545 against 1.2996 at Δt (-3.5%): the drag depends on ν Δt / h²; issue 16",
             },
             KnownFailure {
                 row: "h = 1/32: U(t = 1.2) at Δt/4",
                 quick: true,
                 full: false,
-                why: "1.193 against 1.341 at Δt (-11%); issue 16",
+                why: "1.2025 against 1.2996 at Δt (-7.5%); issue 16",
             },
             KnownFailure {
                 row: "h = 1/48: U(t = 1.2) at Δt/",
@@ -328,7 +328,7 @@ pub const CASES: &[Case] = &[
     },
     Case {
         name: "stratified-rest",
-        description: "a two-layer fluid at rest (density 10 below 1, walls above and below) with body_coupling: Pressure stays at rest: max |u| below 1e-6 sqrt(g L) for 1000 steps",
+        description: "a two-layer fluid at rest (density 10 below 1, walls above and below) stays at rest: max |u| below 1e-6 sqrt(g L) for 1000 steps",
         reference: "hydrostatics (exact discrete balance)",
         full: "2D 96^2 and 3D 32^3",
         quick: "2D 48^2",
@@ -361,14 +361,27 @@ pub const CASES: &[Case] = &[
     },
     Case {
         name: "dkt",
-        description: "drafting, kissing and tumbling: kiss between t = 0.25 and 0.4, smallest gap about h, tumbling by t = 0.6",
+        description: "drafting, kissing and tumbling: kiss between t = 0.25 and 0.4, smallest gap below 2h and never negative, horizontal distance above one radius and growing by t = 0.6",
         reference: "paper section 4.2.2",
         full: "scenes/dkt.ron (h = 1/60) to t = 0.7",
         quick: "the full case (at h = 1/30 the spheres would be 2.5 cells in radius)",
         full_time: RunTime::Minutes,
         quick_time: RunTime::Minutes,
         run: contact::dkt,
-        known_failures: &[],
+        known_failures: &[
+            KnownFailure {
+                row: "smallest gap / h (never negative, about 1)",
+                quick: true,
+                full: true,
+                why: "-0.19 h under the default Pressure coupling (the spheres overlap by 0.0032 while kissing, kappa = 25 as in the paper); 1.76 h with body_coupling: Baroclinic; issue 16",
+            },
+            KnownFailure {
+                row: "horizontal distance of the centres at t = 0.6 exceeds one radius",
+                quick: true,
+                full: true,
+                why: "0.017 at t = 0.6 and 0.027 at 0.65 under the default Pressure coupling: the pair tumbles late (kiss at 0.322). Not a converged criterion for either coupling: Baroclinic passes at the scene's step (0.094) but does not tumble at half of it, Pressure (before the excess-momentum fix) reached 0.052 at half of it; issue 16",
+            },
+        ],
     },
     Case {
         name: "tank-vacuum",
@@ -1491,7 +1504,8 @@ fn sedimentation_2d(quick: bool) -> anyhow::Result<Report> {
     Ok(rep)
 }
 
-/// The coupling the issue-16 rows measure, as a line for a scene's `numerics` block.
+/// The coupling the issue-16 rows measure, as a line for a scene's `numerics` block: the
+/// default (`Pressure`), written out so the reports say which.
 const MODEL: &str = "body_coupling: Pressure";
 
 /// Velocity along gravity of a sphere of radius 0.1 and density `rho` settling in a periodic
@@ -1990,7 +2004,6 @@ fn table1_run(h: f64, scale: f64, land: &[f64]) -> anyhow::Result<Vec<(f64, f64)
             cfl: 4.0 * scale,
             diffusion_number: 0.5 * scale,
         };
-        scene.numerics.body_coupling = crate::base::params::BodyCoupling::Pressure;
         for b in &mut scene.bodies {
             if let crate::bodies::shapes::Shape::Complement(inner) = &mut b.shape {
                 **inner = crate::bodies::shapes::Shape::Cylinder {
