@@ -238,19 +238,19 @@ pub const CASES: &[Case] = &[
                 row: "h = 1/32, Δt: velocity jump at a step shortened",
                 quick: true,
                 full: false,
-                why: "1.1% in the one shortened step (0.1% asked): the drag depends on the step length (no-slip imposed once per step); issue 16",
+                why: "1.6% in the one shortened step (0.1% asked): the drag depends on the step length (no-slip imposed once per step); issue 16",
             },
             KnownFailure {
                 row: "h = 1/32: U(t = 1.2) at Δt/2",
                 quick: true,
                 full: false,
-                why: "1.2545 against 1.2996 at Δt (-3.5%): the drag depends on ν Δt / h²; issue 16",
+                why: "1.2288 against 1.3424 at Δt (-8.5%; Baroclinic: 1.2545 against 1.2996): the drag depends on ν Δt / h²; issue 16",
             },
             KnownFailure {
                 row: "h = 1/32: U(t = 1.2) at Δt/4",
                 quick: true,
                 full: false,
-                why: "1.2025 against 1.2996 at Δt (-7.5%); issue 16",
+                why: "1.1943 against 1.3424 at Δt (-11.0%; Baroclinic: 1.2025 against 1.2996); issue 16",
             },
             KnownFailure {
                 row: "h = 1/48: U(t = 1.2) at Δt/",
