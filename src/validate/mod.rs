@@ -319,6 +319,18 @@ pub const CASES: &[Case] = &[
                 why: "2.31 a0 t: a body lighter than the fluid around it is wrong under Pressure (the fluid's share of the flow's change is divided by a mass that is mostly the rigid band's fluid); issue 16",
             },
             KnownFailure {
+                row: "disk, density 0.001, 25.6 cells per radius, released",
+                quick: false,
+                full: true,
+                why: "4.52 a0 t (2.31 at 12.8 cells per radius): a disk much lighter than the fluid accelerates too fast, and more so on the finer grid; not understood (the sphere converges: 0.65 at 8 cells, 0.963 at 12); issue 16",
+            },
+            KnownFailure {
+                row: "sphere, density 0.001, 12.0 cells per radius, released",
+                quick: false,
+                full: true,
+                why: "0.963 a0 t (-3.7%; 0.65 at 8 cells per radius): the rigid band's fluid mass, shrinking with h; issue 16",
+            },
+            KnownFailure {
                 row: "sphere, density 0.001, 8.0 cells per radius, released",
                 quick: true,
                 full: false,
