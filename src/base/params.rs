@@ -87,7 +87,8 @@ impl Default for TimeStep {
 /// comparison. Measured on a sphere (radius 0.1, h = 1/32) settling at Re ≈ 2e-4 in a
 /// periodic unit box, against Hasimoto's Stokes drag for a cubic array (`stokes-settling`),
 /// and on a disk and a sphere launched in still inviscid fluid (`added-mass`):
-/// - `Pressure` (the default): settling +7.9%, +2.4%, -0.6%, -5.9% at ρ_i = 0.01, 0.5, 2, 20;
+/// - `Pressure` (the default): settling +7.9%, +2.4%, -0.6%, -5.9%, -16%, -59% at ρ_i = 0.01,
+///   0.5, 2, 20, 100, 1000 (the drag grows with the density: 2.4 times Hasimoto's at 1000);
 ///   no blow-up or step-to-step oscillation in any run made, densities 0.001 to 1000 in 2D
 ///   and 3D (releases over 8 steps, settling runs of hundreds to thousands). What is
 ///   still wrong (issue 16): the drag depends on the diffusion number ν Δt / h² (at density
