@@ -64,7 +64,7 @@ use crate::base::grid::Grid;
 use crate::base::params::BodyCoupling;
 use crate::bodies::{Body, BodyFields, GridPatch, RigidState};
 use crate::solvers::Spectral;
-use crate::systems::rigid_velocity::{BodySums, integrate};
+use crate::systems::rigid_velocity::{BodySums, integrate, penalized_weight};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -415,7 +415,7 @@ pub fn pressure(
             st.center,
             &solver.trial,
             &mut sums,
-            |c, _, g| (rho[g] - phase[g]) * ldt * c / (1.0 + ldt * c),
+            |c, _, g| (rho[g] - phase[g]) * penalized_weight(ldt, c),
         );
         state.excess[body.id] = Some(if m != 0.0 {
             ExcessMomentum {
@@ -446,9 +446,18 @@ impl crate::schedule::Plugin for PressurePlugin {
             ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
             let grid = ctx.world.resource::<Grid>().clone();
             ctx.insert_resource(PressureSolver::new(&grid));
+            // One slot per body id (the bodies are spawned before the plugins are built), so
+            // the step does not allocate.
+            let ids = ctx
+                .world
+                .query::<&Body>()
+                .iter(ctx.world)
+                .map(|b| b.id + 1)
+                .max()
+                .unwrap_or(0);
             ctx.insert_resource(PressureState {
                 phi: vec![0.0; grid.len()],
-                excess: Vec::new(),
+                excess: vec![None; ids],
             });
             ctx.checkpoint_resource::<PressureState>("pressure", 2)?;
             ctx.add_system(PhysicsSet::Baroclinic, "pressure", pressure)?;

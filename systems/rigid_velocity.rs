@@ -60,6 +60,14 @@ impl BodySums {
     }
 }
 
+/// The weight w = λΔtχ/(1 + λΔtχ) with which the implicit penalization (`ldt` = λΔt) moves
+/// a node of characteristic function `chi` to the rigid velocity: the region a body's rigid
+/// velocity is averaged over.
+#[inline]
+pub fn penalized_weight(ldt: f64, chi: f64) -> f64 {
+    ldt * chi / (1.0 + ldt * chi)
+}
+
 /// Integrals of a weight χ over a body's patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
 /// measured from the centroid; all zero when ∫χ is.
 pub fn integrate(
@@ -219,7 +227,7 @@ pub fn rigid_velocity(
         // Under the pressure projection the flow carries each region with its own density,
         // so the rigid velocity is the density-weighted mean (the penalization then conserves
         // momentum).
-        let weight = |c: f64| ldt * c / (1.0 + ldt * c);
+        let weight = |c: f64| penalized_weight(ldt, c);
         let (wvol, wcentroid, mut mom, mut ang, wj) = integrate(
             &grid,
             patch,

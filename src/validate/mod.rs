@@ -1955,22 +1955,20 @@ fn settling_run_with(
     settling_run_dt(h, d, nu, mesh, false)
 }
 
-/// [`settling_run_with`], with the scene's time-step policy or (`diffusion_dt`) the
-/// diffusion-number bound alone (no cap on Δt).
-fn settling_run_dt(
+/// The Table 1 tube (`scenes/sphere-settling.ron`) at grid step `h` with a sphere of diameter
+/// `d` (or the mesh file `mesh`, relative to `scenes/`), viscosity `nu`, and its time-step
+/// policy passed through `dt`. The periodic box is the tube's [0,1]² grown by 2 cells of wall
+/// on each side in x and y; the tube's caps keep 2 cells of wall.
+fn tube_scene(
     h: f64,
     d: f64,
     nu: f64,
     mesh: Option<&str>,
-    diffusion_dt: bool,
-) -> anyhow::Result<(f64, Vec<(f64, f64)>)> {
+    dt: impl FnOnce(&mut crate::scene::TimeStep),
+) -> anyhow::Result<ValidScene> {
     let wall = 2.0 * h;
-    let scene = bundled_scene("sphere-settling.ron")?.edit(|scene| {
-        if let (true, crate::scene::TimeStep::Adaptive { dt_max, .. }) =
-            (diffusion_dt, &mut scene.numerics.dt)
-        {
-            *dt_max = None;
-        }
+    Ok(bundled_scene("sphere-settling.ron")?.edit(|scene| {
+        dt(&mut scene.numerics.dt);
         scene.base_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
         scene.domain.origin = Some(vec![-wall, -wall, 0.0]);
         scene.domain.extent = vec![1.0 + 2.0 * wall, 1.0 + 2.0 * wall, 4.0];
@@ -1997,6 +1995,22 @@ fn settling_run_dt(
                 _ => {}
             }
         }
+    })?)
+}
+
+/// [`settling_run_with`], with the scene's time-step policy or (`diffusion_dt`) the
+/// diffusion-number bound alone (no cap on Δt).
+fn settling_run_dt(
+    h: f64,
+    d: f64,
+    nu: f64,
+    mesh: Option<&str>,
+    diffusion_dt: bool,
+) -> anyhow::Result<(f64, Vec<(f64, f64)>)> {
+    let scene = tube_scene(h, d, nu, mesh, |dt| {
+        if let (true, crate::scene::TimeStep::Adaptive { dt_max, .. }) = (diffusion_dt, dt) {
+            *dt_max = None;
+        }
     })?;
     let mut sim = Simulation::new(scene)?;
     let mut curve = Vec::new();
@@ -2016,25 +2030,12 @@ fn settling_run_dt(
 /// CFL bound all times `scale`, no cap on Δt), run to t = 1.2 landing on the times in `land`
 /// first. Returns (t, U downwards) after every step.
 fn table1_run(h: f64, scale: f64, land: &[f64]) -> anyhow::Result<Vec<(f64, f64)>> {
-    let wall = 2.0 * h;
-    let scene = bundled_scene("sphere-settling.ron")?.edit(|scene| {
-        scene.domain.origin = Some(vec![-wall, -wall, 0.0]);
-        scene.domain.extent = vec![1.0 + 2.0 * wall, 1.0 + 2.0 * wall, 4.0];
-        scene.domain.h = Some(h);
-        scene.domain.cells = None;
-        scene.numerics.dt = crate::scene::TimeStep::Adaptive {
+    let scene = tube_scene(h, 0.3, 0.02, None, |dt| {
+        *dt = crate::scene::TimeStep::Adaptive {
             c: 0.5 * scale,
             dt_max: None,
             cfl: 4.0 * scale,
             diffusion_number: 0.5 * scale,
-        };
-        for b in &mut scene.bodies {
-            if let crate::bodies::shapes::Shape::Complement(inner) = &mut b.shape {
-                **inner = crate::bodies::shapes::Shape::Cylinder {
-                    radius: 0.5,
-                    half_height: 2.0 - wall,
-                }
-            }
         }
     })?;
     let mut sim = Simulation::new(scene)?;
