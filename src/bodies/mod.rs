@@ -3,6 +3,7 @@
 
 mod body;
 pub mod contact;
+pub mod free_surface;
 pub mod levelset;
 pub mod shapes;
 pub mod surface;
