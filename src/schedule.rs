@@ -51,6 +51,8 @@ pub enum PhysicsSet {
     Baroclinic,
     /// Particle push, stretching and remeshing (eqs. 29-30).
     Transport,
+    /// The free surface carried by the flow, redistanced, its volume restored (section 5).
+    FreeSurface,
     /// Implicit diffusion.
     Diffusion,
     /// Velocity from vorticity (eq. 15).
@@ -65,7 +67,7 @@ pub enum PhysicsSet {
 
 impl PhysicsSet {
     /// Every set, in schedule order.
-    pub const ALL: [PhysicsSet; 13] = [
+    pub const ALL: [PhysicsSet; 14] = [
         PhysicsSet::First,
         PhysicsSet::LevelSets,
         PhysicsSet::Density,
@@ -74,6 +76,7 @@ impl PhysicsSet {
         PhysicsSet::Penalization,
         PhysicsSet::Baroclinic,
         PhysicsSet::Transport,
+        PhysicsSet::FreeSurface,
         PhysicsSet::Diffusion,
         PhysicsSet::Poisson,
         PhysicsSet::RigidUpdate,

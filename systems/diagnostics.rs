@@ -127,8 +127,16 @@ impl Diagnostics {
 }
 
 /// The step the policy allows for this state, before landing on the next stop time.
-/// `viscous` is ν/h² when the scene has bodies (for the diffusion-number bound), else 0.
-pub fn allowed_dt(policy: &TimeStep, sample: &Sample, h: f64, fallback: f64, viscous: f64) -> f64 {
+/// `viscous` is ν/h² when the scene has bodies (for the diffusion-number bound), else 0;
+/// `wave` is √(|g|/h) with a free surface (dt ≤ c / wave), else 0.
+pub fn allowed_dt(
+    policy: &TimeStep,
+    sample: &Sample,
+    h: f64,
+    fallback: f64,
+    viscous: f64,
+    wave: f64,
+) -> f64 {
     match *policy {
         TimeStep::Fixed(dt) => dt,
         TimeStep::Adaptive {
@@ -143,6 +151,9 @@ pub fn allowed_dt(policy: &TimeStep, sample: &Sample, h: f64, fallback: f64, vis
             }
             if sample.max_omega > 0.0 {
                 dt = dt.min(c / sample.max_omega);
+            }
+            if wave > 0.0 {
+                dt = dt.min(c / wave);
             }
             if let Some(m) = dt_max {
                 dt = dt.min(m);
@@ -172,6 +183,7 @@ pub fn next_dt(
         h,
         fallback,
         params.viscous_rate(h),
+        params.wave_rate(h),
     );
     if params.dt_policy.lands_on_outputs() {
         land_on(t, dt, stop_at)

@@ -15,6 +15,7 @@ pub mod density;
 pub mod diagnostics;
 pub mod diffusion;
 pub mod free_motion;
+pub mod free_surface;
 pub mod level_sets;
 pub mod penalization;
 pub mod poisson;
@@ -28,6 +29,7 @@ pub mod transport;
 pub fn builtin() -> Vec<Box<dyn Plugin>> {
     vec![
         Box::new(level_sets::LevelSetsPlugin),
+        Box::new(free_surface::FreeSurfacePlugin),
         Box::new(density::DensityPlugin),
         Box::new(rigid_velocity::RigidVelocityPlugin),
         Box::new(collision::CollisionPlugin),

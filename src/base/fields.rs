@@ -102,6 +102,8 @@ pub struct Params {
     pub interface_acceleration: InterfaceAcceleration,
     /// Whether the scene has bodies.
     pub has_bodies: bool,
+    /// Whether the scene has a free surface.
+    pub free_surface: bool,
 }
 
 /// The penalization mask of a body from its χ and φ at a node: χ itself when the offset is
@@ -132,6 +134,17 @@ impl Params {
         PenalizationMask {
             offset: self.penalization_offset * h,
             eps: self.interface_cells * h,
+        }
+    }
+
+    /// √(|g|/h) when the scene has a free surface, else 0: the frequency of the shortest
+    /// gravity wave the grid holds (ω² = g k at k = 1/h), which an adaptive step resolves
+    /// (dt ≤ c / rate, with the Lagrangian CFL number c).
+    pub fn wave_rate(&self, h: f64) -> f64 {
+        if self.free_surface {
+            (self.gravity.iter().map(|g| g * g).sum::<f64>().sqrt() / h).sqrt()
+        } else {
+            0.0
         }
     }
 

@@ -50,6 +50,10 @@ pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)
         b.check(dim, &lo, &hi)
             .map_err(|e| e.under(Seg::Index(i)).under(Seg::Key("bodies")))?;
     }
+    if let Some(fs) = &scene.free_surface {
+        fs.check(dim, scene.fluid.density, &lo, &hi)
+            .map_err(|i| i.under(Seg::Key("free_surface")))?;
+    }
     check_vacuum(scene).map_err(|i| i.under(Seg::Key("vacuum")))?;
     scene
         .contact
@@ -60,6 +64,8 @@ pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)
         .check()
         .map_err(|i| i.under(Seg::Key("output")))?;
     let geoms = check_geometry(scene, &grid)?;
+    super::liquid::check_tank(scene, &grid, &geoms)
+        .map_err(|i| i.under(Seg::Key("free_surface")))?;
     check_kappa_scale(scene, &grid, &geoms).map_err(|i| i.under(Seg::Key("contact")))?;
     Ok((grid, geoms))
 }

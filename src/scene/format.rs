@@ -19,6 +19,10 @@ pub struct Scene {
     /// Fluid properties.
     #[serde(default)]
     pub fluid: Fluid,
+    /// A free surface: the liquid (density `fluid.density`) fills the regions given and a gas
+    /// fills the rest of the box (paper section 5, Fig. 10). Default: none (one fluid).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free_surface: Option<FreeSurfaceSpec>,
     /// Time stepping and particle parameters.
     #[serde(default)]
     pub numerics: Numerics,
@@ -179,6 +183,60 @@ impl Default for Fluid {
             background_velocity: Vec::new(),
         }
     }
+}
+
+/// A free surface between the liquid (`fluid.density`) and a lighter gas.
+///
+/// Written as `free_surface: Some((gas_density: 0.01, liquid: [Below(height: 0.5)]))`.
+/// The vertical is the last axis (y in 2D, z in 3D); the box must be closed along it by
+/// static walls (a floor and a ceiling), or the periodic box would stack the liquid on the gas.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FreeSurfaceSpec {
+    /// Density of the gas, mass per volume: positive and below `fluid.density`. Required.
+    pub gas_density: f64,
+    /// The liquid at t = 0: the union of these regions. Required, at least one.
+    pub liquid: Vec<LiquidRegion>,
+}
+
+/// A region filled with liquid at t = 0.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum LiquidRegion {
+    /// A pool: the liquid below the surface z = height + amplitude cos(2π (x - x0) / wavelength),
+    /// z the vertical (last) axis, x the first axis measured from the box's origin x0.
+    Below {
+        /// Mean height of the surface, length (a coordinate along the vertical axis).
+        height: f64,
+        /// Amplitude of the surface's cosine wave, length. Default: 0 (flat).
+        #[serde(default)]
+        amplitude: f64,
+        /// Wavelength of the wave along the first axis, length (> 0 when `amplitude` is not
+        /// 0). Default: the box's extent along the first axis.
+        #[serde(default)]
+        wavelength: Option<f64>,
+    },
+    /// A heavy layer on top: the liquid above the surface z = height + amplitude
+    /// cos(2π (x - x0) / wavelength) (a Rayleigh-Taylor set-up).
+    Above {
+        /// Mean height of the surface, length.
+        height: f64,
+        /// Amplitude of the surface's cosine wave, length. Default: 0 (flat).
+        #[serde(default)]
+        amplitude: f64,
+        /// Wavelength of the wave along the first axis, length. Default: the box's extent
+        /// along the first axis.
+        #[serde(default)]
+        wavelength: Option<f64>,
+    },
+    /// A shape filled with liquid (a drop, a column), centred at `position` (one entry per
+    /// axis), unrotated.
+    Shape {
+        /// The shape (any body shape but `Mesh`; `Complement` fills everything outside it).
+        shape: crate::bodies::shapes::Shape,
+        /// Where its centre is, length.
+        position: Vec<f64>,
+    },
 }
 
 /// Time stepping and particle parameters.

@@ -24,6 +24,7 @@ pub mod check;
 pub mod error;
 pub mod format;
 pub mod kappa;
+mod liquid;
 pub mod overlap;
 pub mod valid;
 

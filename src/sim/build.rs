@@ -32,6 +32,7 @@ pub fn params(scene: &ValidScene) -> Params {
         boussinesq: scene.numerics.boussinesq,
         interface_acceleration: scene.numerics.interface_acceleration,
         has_bodies: !scene.bodies.is_empty(),
+        free_surface: scene.free_surface.is_some(),
     }
 }
 
@@ -146,4 +147,81 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
         ));
     }
     Ok(scene.bodies.len())
+}
+
+/// The scene's free surface, if it has one: its entity and the liquid's level set at t = 0
+/// (the union of the liquid regions, φ_w = max over regions, clipped to the band; the
+/// `free_surface` plugin redistances it before the first step). Returns whether there is one.
+pub fn spawn_free_surface(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyhow::Result<bool> {
+    use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
+    use crate::scene::LiquidRegion;
+    let Some(spec) = &scene.free_surface else {
+        return Ok(false);
+    };
+    let dim = grid.dim;
+    let up = dim - 1;
+    let lo = grid.origin;
+    let ext = grid.extent();
+    let shapes: Vec<Option<(crate::bodies::shapes::ShapeGeometry, DVec3)>> = spec
+        .liquid
+        .iter()
+        .map(|r| match r {
+            LiquidRegion::Shape { shape, position } => shape
+                .build(&scene.base_dir)
+                .map(|g| Some((g, vec3(position))))
+                .map_err(|e| anyhow::anyhow!("free_surface.liquid: {e}")),
+            _ => Ok(None),
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let wave = |x: f64, amplitude: f64, wavelength: Option<f64>| {
+        let l = wavelength.unwrap_or(ext[0]);
+        amplitude * (2.0 * std::f64::consts::PI * (x - lo[0]) / l).cos()
+    };
+    let band = band(grid);
+    let phi_at = |p: [f64; 3]| -> f64 {
+        let mut best = f64::NEG_INFINITY;
+        for (r, s) in spec.liquid.iter().zip(&shapes) {
+            let v = match r {
+                LiquidRegion::Below {
+                    height,
+                    amplitude,
+                    wavelength,
+                } => height + wave(p[0], *amplitude, *wavelength) - p[up],
+                LiquidRegion::Above {
+                    height,
+                    amplitude,
+                    wavelength,
+                } => p[up] - height - wave(p[0], *amplitude, *wavelength),
+                LiquidRegion::Shape { .. } => match s {
+                    Some((g, c)) => g.phi(DVec3::from_array(p) - *c),
+                    None => f64::NEG_INFINITY,
+                },
+            };
+            best = best.max(v);
+        }
+        best.clamp(-band, band)
+    };
+    let [nx, ny, _] = grid.n;
+    let mut phi = vec![0.0; grid.len()];
+    {
+        use rayon::prelude::*;
+        phi.par_chunks_mut(nx).enumerate().for_each(|(row, out)| {
+            let (j, k) = (row % ny, row / ny);
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = phi_at(grid.pos(i, j, k));
+            }
+        });
+    }
+    world.spawn(FreeSurface {
+        liquid_density: scene.fluid.density,
+        gas_density: spec.gas_density,
+    });
+    world.insert_resource(LiquidLevelSet {
+        phi,
+        band,
+        target_volume: 0.0,
+        volume: 0.0,
+        area: 0.0,
+    });
+    Ok(true)
 }

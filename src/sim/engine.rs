@@ -80,6 +80,7 @@ impl Simulation {
             ));
             world.insert_resource(crate::sim::build::contact_params(&scene, grid.h));
         }
+        crate::sim::build::spawn_free_surface(&mut world, &scene, &grid)?;
         world.insert_resource(grid);
         let mode = Mode {
             vacuum: scene.vacuum,

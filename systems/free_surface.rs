@@ -1,0 +1,320 @@
+//! # free_surface: the liquid's level set, carried by the flow (paper section 5)
+//!
+//! The air/water interface is the zero level of φ_w (> 0 in the liquid), which moves with the
+//! flow (not rigidly):
+//!
+//!   ∂φ_w/∂t + u·∇φ_w = 0,
+//!
+//! and sets the density of the fluid phases, ρ_P = ρ_gas + (ρ_liquid - ρ_gas) H_ε(φ_w), with the
+//! bodies' smoothed Heaviside (half-width ε = `interface_cells` h). The density system adds the
+//! bodies (eq. 19): ρ = (1 - Σχ_i) ρ_P + Σ ρ_i χ_i, and the variable-density projection
+//! (`pressure`) makes the baroclinic vorticity of gravity and inertia on the interface.
+//!
+//! * Transport: φ_w rides the vortex particles (Hieber & Koumoutsakos, J. Comput. Phys. 210
+//!   (2005), the paper's ref. [15]): after the vorticity's transport, the same dimensionally
+//!   split RK2 push and M'4 remesh, with the same mid-step velocity and axis order, carry φ_w
+//!   (every node is a particle).
+//! * Redistancing: φ_w is kept a signed distance within the band (|φ_w| ≤ `band`, clipped
+//!   beyond) by pseudo-time iterations of ∂φ/∂τ + sgn(φ⁰)(|∇φ| - 1) = 0 (Sussman, Smereka &
+//!   Osher 1994) with Godunov's upwind |∇φ|, and the subcell fix of Russo & Smereka
+//!   (J. Comput. Phys. 163 (2000)) at the nodes next to the interface: there φ is relaxed to
+//!   D = φ⁰/|∇φ⁰|, the distance the linear interpolation of φ⁰ gives, so the zero level does not
+//!   move. Two iterations per step; many at the start.
+//! * Volume: the M'4 transport is not exactly volume-preserving for a level set, so after each
+//!   step the level set is shifted, φ_w += (V₀ - V)/A, with V = ∫H_ε(φ_w) and A = ∫δ_ε(φ_w)
+//!   (two Newton steps), which holds the liquid volume at its initial value V₀.
+//!
+//! Sums are taken row by row in a fixed order: the results do not depend on the thread count.
+
+use crate::base::fields::{Params, SimTime};
+use crate::base::grid::Grid;
+use crate::base::kernels::heaviside;
+use crate::bodies::BodyFields;
+use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
+use crate::systems::transport::{LineScratch, TransportScratch, sweep};
+use bevy_ecs::prelude::*;
+use rayon::prelude::*;
+
+/// Pseudo-time iterations of the redistancing per step.
+pub const STEP_ITERATIONS: usize = 2;
+
+/// The free surface's scratch: the sweeps' line buffers, the level set before redistancing and
+/// a second buffer for the Jacobi iterations, and per-row partial sums.
+#[derive(Resource)]
+pub struct FreeSurfaceScratch {
+    pool: Vec<LineScratch>,
+    phi0: Vec<f64>,
+    next: Vec<f64>,
+    partial: Vec<[f64; 2]>,
+}
+
+impl FreeSurfaceScratch {
+    /// Scratch for `grid`.
+    pub fn new(grid: &Grid) -> Self {
+        let nmax = *grid.n.iter().max().unwrap_or(&1);
+        FreeSurfaceScratch {
+            pool: (0..32).map(|_| LineScratch::new(nmax, 1)).collect(),
+            phi0: vec![0.0; grid.len()],
+            next: vec![0.0; grid.len()],
+            partial: vec![[0.0; 2]; grid.len() / grid.n[0]],
+        }
+    }
+}
+
+/// The density of the fluid phases from φ_w (before the `density` system adds the bodies).
+pub fn phase_density(
+    params: Res<Params>,
+    grid: Res<Grid>,
+    surfaces: Query<&FreeSurface>,
+    ls: Res<LiquidLevelSet>,
+    mut bf: ResMut<BodyFields>,
+) {
+    let Some(fs) = surfaces.iter().next() else {
+        return;
+    };
+    let eps = params.interface_cells * grid.h;
+    write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
+}
+
+/// ρ_P = ρ_gas + (ρ_liquid - ρ_gas) H_ε(φ_w) at every node.
+pub fn write_phase_density(fs: &FreeSurface, phi: &[f64], eps: f64, rho_phase: &mut [f64]) {
+    let (g, d) = (fs.gas_density, fs.liquid_density - fs.gas_density);
+    rho_phase
+        .par_chunks_mut(4096)
+        .zip(phi.par_chunks(4096))
+        .for_each(|(r, p)| {
+            for (r, &p) in r.iter_mut().zip(p) {
+                *r = g + d * heaviside(p, eps);
+            }
+        });
+}
+
+/// The free surface's step: carry φ_w with the flow, redistance it and restore its volume.
+pub fn free_surface(
+    params: Res<Params>,
+    grid: Res<Grid>,
+    time: Res<SimTime>,
+    transport: Res<TransportScratch>,
+    mut ls: ResMut<LiquidLevelSet>,
+    mut scratch: ResMut<FreeSurfaceScratch>,
+) {
+    let ls = &mut *ls;
+    let scratch = &mut *scratch;
+    // The axes in the order the vorticity was just swept (transport flips its flag after).
+    let reverse = !transport.reverse();
+    let axes: &[usize] = match (grid.dim, reverse) {
+        (2, false) => &[0, 1],
+        (2, true) => &[1, 0],
+        (_, false) => &[0, 1, 2],
+        (_, true) => &[2, 1, 0],
+    };
+    let u = transport.u_mid();
+    for &axis in axes {
+        sweep(
+            &grid,
+            axis,
+            time.dt,
+            std::slice::from_mut(&mut ls.phi),
+            &u[axis],
+            0.0,
+            params.remesh_kernel,
+            &mut scratch.pool,
+        );
+    }
+    redistance(&grid, ls, scratch, STEP_ITERATIONS);
+    let eps = params.interface_cells * grid.h;
+    restore_volume(&grid, ls, scratch, eps);
+}
+
+/// `iterations` pseudo-time steps of the redistancing equation with the Russo-Smereka subcell
+/// fix, then φ clipped to ±band.
+pub fn redistance(
+    grid: &Grid,
+    ls: &mut LiquidLevelSet,
+    scratch: &mut FreeSurfaceScratch,
+    iterations: usize,
+) {
+    let dim = grid.dim;
+    let h = grid.h;
+    let [nx, ny, nz] = grid.n;
+    // Pseudo-time step: h/2 in 2D, h/3 in 3D (first-order Godunov is stable below h/√d).
+    let dtau = if dim == 2 { 0.5 * h } else { h / 3.0 };
+    let band = ls.band;
+    scratch.phi0.copy_from_slice(&ls.phi);
+    let phi0 = &scratch.phi0;
+    let nb = |i: usize, n: usize| -> (usize, usize) {
+        (if i == 0 { n - 1 } else { i - 1 }, if i + 1 == n { 0 } else { i + 1 })
+    };
+    for _ in 0..iterations {
+        let phi = &ls.phi;
+        scratch
+            .next
+            .par_chunks_mut(nx)
+            .enumerate()
+            .for_each(|(row, out)| {
+                let (j, k) = (row % ny, row / ny);
+                let (jm, jp) = nb(j, ny);
+                let (km, kp) = if dim == 3 { nb(k, nz) } else { (k, k) };
+                for (i, o) in out.iter_mut().enumerate() {
+                    let (im, ip) = nb(i, nx);
+                    let c = i + nx * row;
+                    let s0 = phi0[c];
+                    let mut nbs = [(0usize, 0usize); 3];
+                    nbs[0] = (im + nx * row, ip + nx * row);
+                    nbs[1] = (i + nx * (jm + ny * k), i + nx * (jp + ny * k));
+                    if dim == 3 {
+                        nbs[2] = (i + nx * (j + ny * km), i + nx * (j + ny * kp));
+                    }
+                    // Next to the interface: relax to the subcell distance D = φ⁰ h / Δφ⁰.
+                    let near = nbs[..dim]
+                        .iter()
+                        .any(|&(m, p)| s0 * phi0[m] < 0.0 || s0 * phi0[p] < 0.0);
+                    if s0 == 0.0 {
+                        *o = 0.0;
+                        continue;
+                    }
+                    let v = phi[c];
+                    if near {
+                        let mut g2 = 0.0;
+                        for &(m, p) in &nbs[..dim] {
+                            let d = (0.5 * (phi0[p] - phi0[m]).abs())
+                                .max((phi0[p] - s0).abs())
+                                .max((s0 - phi0[m]).abs())
+                                .max(1e-12 * h);
+                            g2 += d * d;
+                        }
+                        let dist = h * s0 / g2.sqrt();
+                        *o = v - dtau / h * (s0.signum() * v.abs() - dist);
+                    } else {
+                        let mut g2 = 0.0;
+                        for &(m, p) in &nbs[..dim] {
+                            let a = (v - phi[m]) / h;
+                            let b = (phi[p] - v) / h;
+                            let t = if s0 > 0.0 {
+                                a.max(0.0).powi(2).max(b.min(0.0).powi(2))
+                            } else {
+                                a.min(0.0).powi(2).max(b.max(0.0).powi(2))
+                            };
+                            g2 += t;
+                        }
+                        *o = v - dtau * s0.signum() * (g2.sqrt() - 1.0);
+                    }
+                    *o = o.clamp(-band, band);
+                }
+            });
+        std::mem::swap(&mut ls.phi, &mut scratch.next);
+    }
+}
+
+/// ∫H_ε(φ) dV and ∫δ_ε(φ) dV, summed row by row in a fixed order.
+pub fn volume_and_area(
+    grid: &Grid,
+    phi: &[f64],
+    partial: &mut [[f64; 2]],
+    eps: f64,
+) -> (f64, f64) {
+    let nx = grid.n[0];
+    partial
+        .par_iter_mut()
+        .zip(phi.par_chunks(nx))
+        .for_each(|(s, row)| {
+            let (mut v, mut a) = (0.0, 0.0);
+            for &p in row {
+                v += heaviside(p, eps);
+                a += delta(p, eps);
+            }
+            *s = [v, a];
+        });
+    let dv = grid.cell_volume();
+    let (v, a) = partial
+        .iter()
+        .fold((0.0, 0.0), |(v, a), s| (v + s[0], a + s[1]));
+    (v * dv, a * dv)
+}
+
+/// The smoothed delta function δ_ε = dH_ε/dφ.
+#[inline]
+pub fn delta(phi: f64, eps: f64) -> f64 {
+    if phi.abs() >= eps {
+        0.0
+    } else {
+        0.5 / eps * (1.0 + (std::f64::consts::PI * phi / eps).cos())
+    }
+}
+
+/// Shift φ so that ∫H_ε(φ) dV returns to the target volume (two Newton steps); records the
+/// volume and area.
+pub fn restore_volume(
+    grid: &Grid,
+    ls: &mut LiquidLevelSet,
+    scratch: &mut FreeSurfaceScratch,
+    eps: f64,
+) {
+    for _ in 0..2 {
+        let (v, a) = volume_and_area(grid, &ls.phi, &mut scratch.partial, eps);
+        ls.volume = v;
+        ls.area = a;
+        if a <= 0.0 {
+            return;
+        }
+        let shift = (ls.target_volume - v) / a;
+        let band = ls.band;
+        ls.phi
+            .par_chunks_mut(4096)
+            .for_each(|c| c.iter_mut().for_each(|p| *p = (*p + shift).clamp(-band, band)));
+    }
+    let (v, a) = volume_and_area(grid, &ls.phi, &mut scratch.partial, eps);
+    ls.volume = v;
+    ls.area = a;
+}
+
+/// Before the first step: redistance the initial level set through the whole band, take its
+/// volume as the one to keep, and set the phases' density.
+pub fn free_surface_init(
+    params: Res<Params>,
+    grid: Res<Grid>,
+    surfaces: Query<&FreeSurface>,
+    mut ls: ResMut<LiquidLevelSet>,
+    mut scratch: ResMut<FreeSurfaceScratch>,
+    mut bf: ResMut<BodyFields>,
+) {
+    let ls = &mut *ls;
+    let eps = params.interface_cells * grid.h;
+    // A restart holds a redistanced level set and its target: leave both.
+    if ls.target_volume == 0.0 {
+        let dtau = if grid.dim == 2 { 0.5 } else { 1.0 / 3.0 };
+        let its = (3.0 * ls.band / grid.h / dtau).ceil() as usize;
+        redistance(&grid, ls, &mut scratch, its);
+        let (v, a) = volume_and_area(&grid, &ls.phi, &mut scratch.partial, eps);
+        ls.target_volume = v;
+        ls.volume = v;
+        ls.area = a;
+    }
+    if let Some(fs) = surfaces.iter().next() {
+        write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
+    }
+}
+
+/// The free surface (a scene with `free_surface`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FreeSurfacePlugin;
+
+impl crate::schedule::Plugin for FreeSurfacePlugin {
+    fn name(&self) -> &'static str {
+        "free_surface"
+    }
+
+    fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
+        use crate::schedule::PhysicsSet;
+        if !ctx.world.contains_resource::<LiquidLevelSet>() {
+            return Ok(());
+        }
+        let grid = ctx.world.resource::<Grid>().clone();
+        ctx.insert_resource(FreeSurfaceScratch::new(&grid));
+        ctx.checkpoint_resource::<LiquidLevelSet>("free_surface", 1)?;
+        ctx.add_startup_system("free_surface_init", free_surface_init)?;
+        ctx.add_system(PhysicsSet::Density, "phase_density", phase_density)?;
+        ctx.add_system(PhysicsSet::FreeSurface, "free_surface", free_surface)?;
+        Ok(())
+    }
+}
