@@ -14,6 +14,9 @@ use crate::scene::{BodyKind, FieldName, OutputFormat, Precision, ValidScene};
 const BYTES_PER_CELL_3D: f64 = 130.0;
 const BYTES_PER_CELL_2D: f64 = 70.0;
 
+/// The most distinct densities listed one by one; beyond, their range is given.
+const MAX_LISTED_DENSITIES: usize = 8;
+
 /// A byte count as a person reads it.
 pub fn human_bytes(b: f64) -> String {
     if b >= 1e9 {
@@ -240,28 +243,85 @@ pub fn describe(scene: &ValidScene) -> String {
     } else if !scene.vacuum {
         let _ = writeln!(s, "  initial vorticity: none (fluid at rest)");
     }
-    // Bodies grouped by kind, shape and density.
-    let mut groups: BTreeMap<(String, String, String), usize> = BTreeMap::new();
+    // Bodies counted by shape and by density, then grouped by kind, shape and density (a
+    // density range when there are too many values to list).
+    let density_of = |b: &crate::scene::BodySpec| match b.kind {
+        BodyKind::Dynamic => Some(b.density.unwrap_or(f.density)),
+        _ => None,
+    };
+    let mut densities: BTreeMap<u64, usize> = BTreeMap::new();
+    for d in scene.bodies.iter().filter_map(density_of) {
+        *densities.entry(d.to_bits()).or_default() += 1;
+    }
+    let many = densities.len() > MAX_LISTED_DENSITIES;
+    // (kind, shape, density when listed) -> (count, least and greatest density).
+    let mut groups: BTreeMap<(&str, &str, String), (usize, f64, f64)> = BTreeMap::new();
     for b in &scene.bodies {
         let kind = match &b.kind {
             BodyKind::Dynamic => "dynamic",
             BodyKind::Static => "static",
             BodyKind::Kinematic { .. } => "kinematic",
         };
-        let density = match (&b.kind, b.density) {
-            (BodyKind::Dynamic, Some(d)) => format!("density {d}"),
-            (BodyKind::Dynamic, None) => format!("density {} (the fluid's)", f.density),
+        let d = density_of(b);
+        let label = match (d, b.density) {
+            (Some(d), Some(_)) if !many => format!("density {d}"),
+            (Some(d), None) if !many => format!("density {d} (the fluid's)"),
             _ => String::new(),
         };
-        *groups
-            .entry((kind.to_string(), b.shape.name().to_string(), density))
-            .or_default() += 1;
+        let g = groups.entry((kind, b.shape.name(), label)).or_insert((
+            0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ));
+        g.0 += 1;
+        if let Some(d) = d {
+            g.1 = g.1.min(d);
+            g.2 = g.2.max(d);
+        }
     }
     if scene.bodies.is_empty() {
         let _ = writeln!(s, "  bodies: none");
     } else {
-        let _ = writeln!(s, "  bodies: {}", scene.bodies.len());
-        for ((kind, shape, density), n) in &groups {
+        let mut shapes: BTreeMap<&str, usize> = BTreeMap::new();
+        for b in &scene.bodies {
+            *shapes.entry(b.shape.name()).or_default() += 1;
+        }
+        let mut shapes: Vec<(&str, usize)> = shapes.into_iter().collect();
+        shapes.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+        let shapes: Vec<String> = shapes.iter().map(|(k, n)| format!("{k} {n}")).collect();
+        let mut line = format!("  bodies: {} ({})", scene.bodies.len(), shapes.join(", "));
+        if many {
+            let lo = densities
+                .keys()
+                .map(|&d| f64::from_bits(d))
+                .fold(f64::INFINITY, f64::min);
+            let hi = densities
+                .keys()
+                .map(|&d| f64::from_bits(d))
+                .fold(f64::NEG_INFINITY, f64::max);
+            let _ = write!(
+                line,
+                "; densities: {} values from {} to {}",
+                densities.len(),
+                sig4(lo),
+                sig4(hi)
+            );
+        } else if !densities.is_empty() {
+            let list: Vec<String> = densities
+                .iter()
+                .map(|(&d, n)| format!("{} x {n}", f64::from_bits(d)))
+                .collect();
+            let _ = write!(line, "; densities: {}", list.join(", "));
+        }
+        let _ = writeln!(s, "{line}");
+        for ((kind, shape, label), (n, lo, hi)) in &groups {
+            let density = if !label.is_empty() || !lo.is_finite() {
+                label.clone()
+            } else if lo == hi {
+                format!("density {}", sig4(*lo))
+            } else {
+                format!("densities {} to {}", sig4(*lo), sig4(*hi))
+            };
             let sep = if density.is_empty() { "" } else { ", " };
             let _ = writeln!(s, "    {n} {kind} {shape}{sep}{density}");
         }
