@@ -338,3 +338,31 @@ fn bundled_grains_scene_checks_with_counts_by_shape_and_density() {
         .collect();
     assert_eq!(grains.len(), 60);
 }
+
+#[test]
+fn check_memory_estimate_is_near_the_measured_peak() {
+    // The estimate `tumble check` prints against `tumble bench`'s measured peak (VmHWM) on the
+    // grains scene: loosely, within a factor 1.5 either way. Time is not tested (it varies
+    // with the machine's load).
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = Scene::load(&root.join("scenes/grains.ron")).unwrap();
+    let est = tumble::io::estimate::estimate(&scene);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tumble"))
+        .args(["bench", "--steps", "1", "--warmup", "1"])
+        .arg(root.join("scenes/grains.ron"))
+        .output()
+        .expect("tumble runs");
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON line");
+    let Some(peak) = v["peak_memory_bytes"].as_f64() else {
+        eprintln!("no peak memory on this platform");
+        return;
+    };
+    let ratio = est.bytes / peak;
+    assert!(
+        (1.0 / 1.5..1.5).contains(&ratio),
+        "estimate {} against peak {peak}",
+        est.bytes
+    );
+    assert!(est.seconds_per_step > 0.0 && est.patch_nodes > est.nodes);
+}

@@ -1,5 +1,5 @@
-//! What `tumble check` prints: a scene in words a person reads before running it: the grid and
-//! its memory, the time step policy, the bodies counted by kind and shape (never one line per
+//! What `tumble check` prints: a scene in words a person reads before running it: the grid, its
+//! estimated memory and time per step, the time step policy, the bodies counted by kind and shape (never one line per
 //! body), vacuum or not, what will be written and about how large, and the warnings.
 
 use std::collections::BTreeMap;
@@ -7,12 +7,6 @@ use std::fmt::Write as _;
 
 use crate::base::params::TimeStep;
 use crate::scene::{BodyKind, FieldName, OutputFormat, Precision, ValidScene};
-
-/// Bytes per grid cell a 3D run holds (fields, particles, FFT scratch), measured by `tumble
-/// bench` on `taylor-green-3d` at 128^3 (130 B per cell); 2D runs hold about half as many
-/// arrays per cell.
-const BYTES_PER_CELL_3D: f64 = 130.0;
-const BYTES_PER_CELL_2D: f64 = 70.0;
 
 /// The most distinct densities listed one by one; beyond, their range is given.
 const MAX_LISTED_DENSITIES: usize = 8;
@@ -199,15 +193,10 @@ pub fn describe(scene: &ValidScene) -> String {
         vector(&g.origin[..g.dim]),
         vector(&g.extent()[..g.dim])
     );
-    let per_cell = if g.dim == 3 {
-        BYTES_PER_CELL_3D
-    } else {
-        BYTES_PER_CELL_2D
-    };
     let _ = writeln!(
         s,
-        "  memory: about {} for the fields, particles and FFTs",
-        human_bytes(per_cell * cells as f64)
+        "  {}",
+        crate::io::estimate::words(&crate::io::estimate::estimate(scene))
     );
     let f = &scene.fluid;
     if scene.vacuum {
