@@ -70,7 +70,7 @@ pub fn scene_summary(scene: &crate::scene::ValidScene) -> String {
     format!(
         "scene: {} bodies ({dynamic} dynamic, {stat} static, {kinematic} kinematic), {flow}, \
          {} initial vorticity field(s), dt {:?}, end time {}, snapshots every {}, formats {:?}, \
-         contact kappa {}",
+         contact kappa {}; {}",
         scene.bodies.len(),
         scene.initial.len(),
         scene.numerics.dt,
@@ -80,7 +80,8 @@ pub fn scene_summary(scene: &crate::scene::ValidScene) -> String {
             .every
             .map_or("(first and last only)".to_string(), |e| e.to_string()),
         scene.output.formats,
-        crate::io::summary::kappa_in_use(scene)
+        crate::io::summary::kappa_in_use(scene),
+        crate::io::estimate::words(&crate::io::estimate::estimate(scene))
     )
 }
 

@@ -1,5 +1,5 @@
-//! What `tumble check` prints: a scene in words a person reads before running it: the grid and
-//! its memory, the time step policy, the bodies counted by kind and shape (never one line per
+//! What `tumble check` prints: a scene in words a person reads before running it: the grid, its
+//! estimated memory and time per step, the time step policy, the bodies counted by kind and shape (never one line per
 //! body), vacuum or not, what will be written and about how large, and the warnings.
 
 use std::collections::BTreeMap;
@@ -8,11 +8,8 @@ use std::fmt::Write as _;
 use crate::base::params::TimeStep;
 use crate::scene::{BodyKind, FieldName, OutputFormat, Precision, ValidScene};
 
-/// Bytes per grid cell a 3D run holds (fields, particles, FFT scratch), measured by `tumble
-/// bench` on `taylor-green-3d` at 128^3 (130 B per cell); 2D runs hold about half as many
-/// arrays per cell.
-const BYTES_PER_CELL_3D: f64 = 130.0;
-const BYTES_PER_CELL_2D: f64 = 70.0;
+/// The most distinct densities listed one by one; beyond, their range is given.
+const MAX_LISTED_DENSITIES: usize = 8;
 
 /// A byte count as a person reads it.
 pub fn human_bytes(b: f64) -> String {
@@ -196,15 +193,10 @@ pub fn describe(scene: &ValidScene) -> String {
         vector(&g.origin[..g.dim]),
         vector(&g.extent()[..g.dim])
     );
-    let per_cell = if g.dim == 3 {
-        BYTES_PER_CELL_3D
-    } else {
-        BYTES_PER_CELL_2D
-    };
     let _ = writeln!(
         s,
-        "  memory: about {} for the fields, particles and FFTs",
-        human_bytes(per_cell * cells as f64)
+        "  {}",
+        crate::io::estimate::words(&crate::io::estimate::estimate(scene))
     );
     let f = &scene.fluid;
     if scene.vacuum {
@@ -240,28 +232,85 @@ pub fn describe(scene: &ValidScene) -> String {
     } else if !scene.vacuum {
         let _ = writeln!(s, "  initial vorticity: none (fluid at rest)");
     }
-    // Bodies grouped by kind, shape and density.
-    let mut groups: BTreeMap<(String, String, String), usize> = BTreeMap::new();
+    // Bodies counted by shape and by density, then grouped by kind, shape and density (a
+    // density range when there are too many values to list).
+    let density_of = |b: &crate::scene::BodySpec| match b.kind {
+        BodyKind::Dynamic => Some(b.density.unwrap_or(f.density)),
+        _ => None,
+    };
+    let mut densities: BTreeMap<u64, usize> = BTreeMap::new();
+    for d in scene.bodies.iter().filter_map(density_of) {
+        *densities.entry(d.to_bits()).or_default() += 1;
+    }
+    let many = densities.len() > MAX_LISTED_DENSITIES;
+    // (kind, shape, density when listed) -> (count, least and greatest density).
+    let mut groups: BTreeMap<(&str, &str, String), (usize, f64, f64)> = BTreeMap::new();
     for b in &scene.bodies {
         let kind = match &b.kind {
             BodyKind::Dynamic => "dynamic",
             BodyKind::Static => "static",
             BodyKind::Kinematic { .. } => "kinematic",
         };
-        let density = match (&b.kind, b.density) {
-            (BodyKind::Dynamic, Some(d)) => format!("density {d}"),
-            (BodyKind::Dynamic, None) => format!("density {} (the fluid's)", f.density),
+        let d = density_of(b);
+        let label = match (d, b.density) {
+            (Some(d), Some(_)) if !many => format!("density {d}"),
+            (Some(d), None) if !many => format!("density {d} (the fluid's)"),
             _ => String::new(),
         };
-        *groups
-            .entry((kind.to_string(), b.shape.name().to_string(), density))
-            .or_default() += 1;
+        let g = groups.entry((kind, b.shape.name(), label)).or_insert((
+            0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ));
+        g.0 += 1;
+        if let Some(d) = d {
+            g.1 = g.1.min(d);
+            g.2 = g.2.max(d);
+        }
     }
     if scene.bodies.is_empty() {
         let _ = writeln!(s, "  bodies: none");
     } else {
-        let _ = writeln!(s, "  bodies: {}", scene.bodies.len());
-        for ((kind, shape, density), n) in &groups {
+        let mut shapes: BTreeMap<&str, usize> = BTreeMap::new();
+        for b in &scene.bodies {
+            *shapes.entry(b.shape.name()).or_default() += 1;
+        }
+        let mut shapes: Vec<(&str, usize)> = shapes.into_iter().collect();
+        shapes.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+        let shapes: Vec<String> = shapes.iter().map(|(k, n)| format!("{k} {n}")).collect();
+        let mut line = format!("  bodies: {} ({})", scene.bodies.len(), shapes.join(", "));
+        if many {
+            let lo = densities
+                .keys()
+                .map(|&d| f64::from_bits(d))
+                .fold(f64::INFINITY, f64::min);
+            let hi = densities
+                .keys()
+                .map(|&d| f64::from_bits(d))
+                .fold(f64::NEG_INFINITY, f64::max);
+            let _ = write!(
+                line,
+                "; densities: {} values from {} to {}",
+                densities.len(),
+                sig4(lo),
+                sig4(hi)
+            );
+        } else if !densities.is_empty() {
+            let list: Vec<String> = densities
+                .iter()
+                .map(|(&d, n)| format!("{} x {n}", f64::from_bits(d)))
+                .collect();
+            let _ = write!(line, "; densities: {}", list.join(", "));
+        }
+        let _ = writeln!(s, "{line}");
+        for ((kind, shape, label), (n, lo, hi)) in &groups {
+            let density = if !label.is_empty() || !lo.is_finite() {
+                label.clone()
+            } else if lo == hi {
+                format!("density {}", sig4(*lo))
+            } else {
+                format!("densities {} to {}", sig4(*lo), sig4(*hi))
+            };
             let sep = if density.is_empty() { "" } else { ", " };
             let _ = writeln!(s, "    {n} {kind} {shape}{sep}{density}");
         }

@@ -8,6 +8,7 @@ use super::error::{Check, Issue, Seg, fail};
 use super::format::{
     BodySpec, Contact, Domain, Fluid, InitialVorticity, Numerics, Output, OutputFormat, Scene,
 };
+use super::generate::Span;
 use crate::base::grid::Grid;
 use crate::base::params::{BodyCoupling, InterfaceAcceleration, TimeStep};
 use crate::bodies::BodyKind;
@@ -50,8 +51,51 @@ pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)
         b.check(dim, &lo, &hi)
             .map_err(|e| e.under(Seg::Index(i)).under(Seg::Key("bodies")))?;
     }
+    // Generators become bodies after the listed ones; a problem with one of theirs is
+    // located at the generator.
+    let listed = scene.bodies.len();
+    let generators = std::mem::take(&mut scene.generators);
+    let spans = super::generate::expand(
+        &generators,
+        &mut scene.bodies,
+        dim,
+        &lo,
+        &hi,
+        &scene.base_dir,
+    )?;
+    check_bodies_and_rest(scene, &grid, listed, &lo, &hi).map_err(|i| in_generator(i, &spans))
+}
+
+/// A problem with a generated body, located at its generator (`generators[g]`).
+fn in_generator(mut issue: Issue, spans: &[Span]) -> Issue {
+    if let [Seg::Key("bodies"), Seg::Index(b), ..] = issue.path[..]
+        && let Some(s) = spans.iter().find(|s| (s.start..s.end).contains(&b))
+    {
+        issue.path = vec![Seg::Key("generators"), Seg::Index(s.generator)];
+        issue.message = format!(
+            "{} (a body made by generators[{}])",
+            issue.message, s.generator
+        );
+    }
+    issue
+}
+
+/// The checks after the generators' expansion: the generated bodies (from index `listed`
+/// on), then everything that looks at all bodies.
+fn check_bodies_and_rest(
+    scene: &mut Scene,
+    grid: &Grid,
+    listed: usize,
+    lo: &[f64],
+    hi: &[f64],
+) -> Check<(Grid, Vec<ShapeGeometry>)> {
+    let dim = grid.dim;
+    for (i, b) in scene.bodies.iter().enumerate().skip(listed) {
+        b.check(dim, lo, hi)
+            .map_err(|e| e.under(Seg::Index(i)).under(Seg::Key("bodies")))?;
+    }
     if let Some(fs) = &scene.free_surface {
-        fs.check(dim, scene.fluid.density, &lo, &hi)
+        fs.check(dim, scene.fluid.density, lo, hi)
             .map_err(|i| i.under(Seg::Key("free_surface")))?;
     }
     check_vacuum(scene).map_err(|i| i.under(Seg::Key("vacuum")))?;
@@ -63,11 +107,11 @@ pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)
         .output
         .check()
         .map_err(|i| i.under(Seg::Key("output")))?;
-    let geoms = check_geometry(scene, &grid)?;
-    super::liquid::check_tank(scene, &grid, &geoms)
+    let geoms = check_geometry(scene, grid)?;
+    super::liquid::check_tank(scene, grid, &geoms)
         .map_err(|i| i.under(Seg::Key("free_surface")))?;
-    check_kappa_scale(scene, &grid, &geoms).map_err(|i| i.under(Seg::Key("contact")))?;
-    Ok((grid, geoms))
+    check_kappa_scale(scene, grid, &geoms).map_err(|i| i.under(Seg::Key("contact")))?;
+    Ok((grid.clone(), geoms))
 }
 
 /// A scene's name names its run directory `runs/<name>`: one plain path component.

@@ -36,6 +36,13 @@ pub struct Scene {
     /// (walls, tanks). Default: none.
     #[serde(default)]
     pub bodies: Vec<BodySpec>,
+    /// Body generators: many bodies on a lattice or packed at random in a region, each
+    /// `(name: "grain", layout: Random(..) or Lattice(..), seed: .., shapes: [..], ...)` (see
+    /// [`crate::scene::generate::Generator`]). They are expanded when the scene is loaded into
+    /// ordinary bodies appended after `bodies`, so a loaded scene holds them in `bodies` and
+    /// this list empty. Default: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub generators: Vec<crate::scene::generate::Generator>,
     /// Contact between bodies (the level-set collision model, eqs. 20-22).
     #[serde(default)]
     pub contact: Contact,

@@ -17,12 +17,13 @@
 //!
 //! The files: [`format`] (the serde structs, every field documented), [`check`] (one check per
 //! type), [`error`] (errors and their locations), [`kappa`] (the default contact strength from
-//! the scene's scales), [`overlap`] (bodies overlapping at the start) and [`valid`] (the
+//! the scene's scales), [`generate`] (body generators, expanded into bodies), [`overlap`] (bodies overlapping at the start) and [`valid`] (the
 //! [`ValidScene`] that only those checks make, the only scene the engine takes).
 
 pub mod check;
 pub mod error;
 pub mod format;
+pub mod generate;
 pub mod kappa;
 mod liquid;
 pub mod overlap;

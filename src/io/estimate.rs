@@ -1,0 +1,160 @@
+//! Estimated peak memory and time per step of a scene, printed by `tumble check` and the run
+//! log before a run: an estimate from a model, not a measurement.
+//!
+//! Memory counts the arrays the engine allocates: per grid node, the vorticity, velocity and
+//! previous velocity (`Fields`), the carrying velocity (`TransportScratch`), with bodies the
+//! density, fluid-phase density, Σχ, union φ, penalization increment and owner
+//! (`BodyFields`), with the `Pressure` coupling the face coefficients, source, trial velocity,
+//! conjugate-gradient vectors and φ (`PressureSolver`, `PressureState`), and with a flow the
+//! vorticity spectrum and a work spectrum (`Spectral`); per body, its local level set (its
+//! bounding box grown by the band, sampled at h) and its grid patch (φ and χ over the world box
+//! its rotated bounds and band cover; the whole grid for a wall); plus the process's own
+//! [`BASE_BYTES`]. Time per step is [`FLOW_SECONDS_PER_NODE`] per node with a flow, plus
+//! [`BODY_GRID_SECONDS_PER_NODE`] per node with bodies in a flow (pressure projection, density,
+//! penalization), plus [`SECONDS_PER_PATCH_NODE`] per patch node (level sets, contact, rigid
+//! velocity), so both grow with the grid plus the bodies' total size, never with their
+//! product.
+//!
+//! Measured against `tumble bench --steps 10` on the machine the constants come from (2
+//! threads, 2026-05), estimate against bench: dkt 0.59 s and 285 MB against 0.55 s and 295 MB;
+//! tank-200 0.23 s and 132 MB against 0.27 s and 122 MB; tank-200-vacuum 0.060 s and 94 MB
+//! against 0.056 s and 84 MB; grains 0.091 s and 56 MB against 0.16 s (13 pressure iterations
+//! a step against dkt's 7) and 54 MB; lamb-oseen 0.0041 s and 11.2 MB against 0.0038 s and
+//! 10.7 MB. The time constants were fitted on dkt and tank-200, so those two agree by
+//! construction; time also depends on the pressure solver's iterations, the machine and its
+//! load (timings here vary 3 times between days): read it as the order of
+//! magnitude.
+
+use crate::bodies::band;
+use crate::scene::{BodyCoupling, ValidScene};
+use glam::{DMat3, DQuat, DVec3};
+
+/// Process memory besides the scene's arrays (code, threads, allocator), bytes: `tumble bench
+/// scenes/lamb-oseen.ron` (16,384 cells, about 1 MB of arrays) peaked at 10.7 MB, 2 cores,
+/// 2026-05.
+pub const BASE_BYTES: f64 = 10.0e6;
+
+/// Seconds per grid node and step of the flow solver (transport, diffusion, Poisson,
+/// diagnostics) on 2 threads: `tumble bench scenes/dkt.ron --steps 10` (864,000 cells) spent
+/// 0.216 s a step in them, 2 cores, 2026-05.
+pub const FLOW_SECONDS_PER_NODE: f64 = 2.5e-7;
+
+/// Seconds per grid node and step of the bodies' grid work in a flow (pressure projection,
+/// density, penalization) on 2 threads: the same dkt bench spent 0.342 s a step in them (7
+/// pressure iterations a step).
+pub const BODY_GRID_SECONDS_PER_NODE: f64 = 4.0e-7;
+
+/// Seconds per patch node and step (level sets, collision, rigid velocity or free motion) on
+/// 2 threads: `tumble bench scenes/tank-200.ron --steps 10` spent 0.055 s a step in them over
+/// 1.72 million patch nodes (200 spheres and the box's whole grid), 2 cores, 2026-05;
+/// tank-200-vacuum 0.056 s.
+pub const SECONDS_PER_PATCH_NODE: f64 = 3.2e-8;
+
+/// A scene's estimated cost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Peak memory, bytes.
+    pub bytes: f64,
+    /// Wall time per step on 2 threads, seconds.
+    pub seconds_per_step: f64,
+    /// Grid nodes.
+    pub nodes: f64,
+    /// Σ over bodies of their grid patches' nodes.
+    pub patch_nodes: f64,
+}
+
+/// Nodes of a box of the given side lengths at spacing `h` (at least 2 per axis), `dim` axes.
+fn box_nodes(size: DVec3, h: f64, dim: usize) -> f64 {
+    (0..dim)
+        .map(|a| (size[a] / h).ceil().max(1.0) + 1.0)
+        .product()
+}
+
+/// The estimate for `scene`.
+pub fn estimate(scene: &ValidScene) -> Estimate {
+    let g = scene.grid();
+    let dim = g.dim;
+    let n = g.len() as f64;
+    let h = g.h;
+    let d = dim as f64;
+    let nc = g.omega_components() as f64;
+    let bodies = !scene.bodies.is_empty();
+    let flow = !scene.vacuum;
+    let pressure = bodies && flow && scene.numerics.body_coupling == BodyCoupling::Pressure;
+    // f64 arrays per node.
+    let mut per_node = nc + 2.0 * d + d; // Fields (ω, u, u_prev) + TransportScratch (u_mid)
+    if bodies {
+        per_node += 4.0 + d + 0.5; // BodyFields: ρ, ρ_P, χ, φ, du, owner (u32)
+    }
+    if pressure {
+        per_node += 3.0 * d + 4.0 + 1.0; // β, src, trial; r, z, p, ap; PressureState φ
+    }
+    if flow {
+        // Spectral: ω̂ per component and a work buffer, (nx/2 + 1) complex per nx reals.
+        let nx = g.n[0] as f64;
+        per_node += (nc + 1.0) * 2.0 * (nx / 2.0 + 1.0).floor() / nx;
+    }
+    let b = band(&g);
+    let (mut local_nodes, mut patch_nodes) = (0.0, 0.0);
+    for (spec, geom) in scene.bodies.iter().zip(scene.geometries()) {
+        match geom.bounds() {
+            Some((lo, hi)) => {
+                let size = hi - lo;
+                local_nodes += box_nodes(size + DVec3::splat(2.0 * b), h, dim);
+                let r = crate::bodies::angular3(&spec.rotation);
+                let m = if r.length() > 0.0 {
+                    DMat3::from_quat(DQuat::from_scaled_axis(r))
+                } else {
+                    DMat3::IDENTITY
+                };
+                // World box of the rotated body box: |M| times the half sizes.
+                let half = 0.5 * size;
+                let world = DVec3::new(
+                    m.row(0).abs().dot(half),
+                    m.row(1).abs().dot(half),
+                    m.row(2).abs().dot(half),
+                );
+                let patch = box_nodes(2.0 * world + DVec3::splat(2.0 * b), h, dim);
+                patch_nodes += patch.min(n);
+            }
+            None => patch_nodes += n,
+        }
+    }
+    let bytes = BASE_BYTES + 8.0 * (per_node * n + local_nodes + 2.0 * patch_nodes);
+    let mut seconds = SECONDS_PER_PATCH_NODE * patch_nodes;
+    if flow {
+        seconds += FLOW_SECONDS_PER_NODE * n;
+        if bodies {
+            seconds += BODY_GRID_SECONDS_PER_NODE * n;
+        }
+    }
+    Estimate {
+        bytes,
+        seconds_per_step: seconds,
+        nodes: n,
+        patch_nodes,
+    }
+}
+
+/// The estimate in words: "about 124 MB peak, about 0.23 s per step on 2 threads".
+pub fn words(e: &Estimate) -> String {
+    format!(
+        "estimated peak memory {}, estimated {} s per step on 2 threads ({} grid nodes, {} \
+         body patch nodes; a model of `tumble bench` on a 2-core machine, see io::estimate)",
+        crate::io::summary::human_bytes(e.bytes),
+        sig2(e.seconds_per_step),
+        sig2(e.nodes),
+        sig2(e.patch_nodes)
+    )
+}
+
+fn sig2(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    if x >= 1e5 {
+        return format!("{x:.2e}");
+    }
+    let decimals = (1 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.decimals$}")
+}
