@@ -51,12 +51,13 @@ pub enum PhysicsSet {
     Baroclinic,
     /// Particle push, stretching and remeshing (eqs. 29-30).
     Transport,
-    /// The free surface carried by the flow, redistanced, its volume restored (section 5).
-    FreeSurface,
     /// Implicit diffusion.
     Diffusion,
     /// Velocity from vorticity (eq. 15).
     Poisson,
+    /// The free surface carried by the new velocity, redistanced, its volume restored
+    /// (section 5).
+    FreeSurface,
     /// Move the bodies.
     RigidUpdate,
     /// Clock, time step, global quantities, blow-up guard.
@@ -76,9 +77,9 @@ impl PhysicsSet {
         PhysicsSet::Penalization,
         PhysicsSet::Baroclinic,
         PhysicsSet::Transport,
-        PhysicsSet::FreeSurface,
         PhysicsSet::Diffusion,
         PhysicsSet::Poisson,
+        PhysicsSet::FreeSurface,
         PhysicsSet::RigidUpdate,
         PhysicsSet::Diagnostics,
         PhysicsSet::Last,

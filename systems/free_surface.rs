@@ -10,10 +10,15 @@
 //! bodies (eq. 19): ρ = (1 - Σχ_i) ρ_P + Σ ρ_i χ_i, and the variable-density projection
 //! (`pressure`) makes the baroclinic vorticity of gravity and inertia on the interface.
 //!
-//! * Transport: φ_w rides the vortex particles (Hieber & Koumoutsakos, J. Comput. Phys. 210
-//!   (2005), the paper's ref. [15]): after the vorticity's transport, the same dimensionally
-//!   split RK2 push and M'4 remesh, with the same mid-step velocity and axis order, carry φ_w
-//!   (every node is a particle).
+//! * Transport: φ_w rides particles as the vorticity does (Hieber & Koumoutsakos, J. Comput.
+//!   Phys. 210 (2005), the paper's ref. [15]): the same dimensionally split RK2 push and M'4
+//!   remesh (every node is a particle, the axis order alternating every step), with the
+//!   velocity u^{n+1} of this step's Poisson solve. The interface and the flow then advance as
+//!   a symplectic Euler pair (the baroclinic vorticity from φ_w^n, then φ_w moved by the
+//!   velocity it made), so an interface oscillation neither grows nor decays from the time
+//!   stepping. Carried instead by the transport's mid-step velocity extrapolated from u^n and
+//!   u^{n-1} (before this step's baroclinic increment), a standing wave at ratio 1:10 grew by
+//!   12% per half period.
 //! * Redistancing: φ_w is kept a signed distance within the band (|φ_w| ≤ `band`, clipped
 //!   beyond) by pseudo-time iterations of ∂φ/∂τ + sgn(φ⁰)(|∇φ| - 1) = 0 (Sussman, Smereka &
 //!   Osher 1994) with Godunov's upwind |∇φ|, and the subcell fix of Russo & Smereka
@@ -26,12 +31,12 @@
 //!
 //! Sums are taken row by row in a fixed order: the results do not depend on the thread count.
 
-use crate::base::fields::{Params, SimTime};
+use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::base::kernels::heaviside;
 use crate::bodies::BodyFields;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
-use crate::systems::transport::{LineScratch, TransportScratch, sweep};
+use crate::systems::transport::{LineScratch, sweep};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -94,21 +99,21 @@ pub fn free_surface(
     params: Res<Params>,
     grid: Res<Grid>,
     time: Res<SimTime>,
-    transport: Res<TransportScratch>,
+    fields: Res<Fields>,
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
 ) {
     let ls = &mut *ls;
     let scratch = &mut *scratch;
-    // The axes in the order the vorticity was just swept (transport flips its flag after).
-    let reverse = !transport.reverse();
+    // x y z on even steps, z y x on odd ones (second order over two steps).
+    let reverse = time.step % 2 == 1;
     let axes: &[usize] = match (grid.dim, reverse) {
         (2, false) => &[0, 1],
         (2, true) => &[1, 0],
         (_, false) => &[0, 1, 2],
         (_, true) => &[2, 1, 0],
     };
-    let u = transport.u_mid();
+    let u = &fields.u;
     for &axis in axes {
         sweep(
             &grid,

@@ -20,6 +20,7 @@ use std::path::{Path, PathBuf};
 
 mod contact;
 pub mod docs;
+mod free_surface;
 
 /// How long a version of a case takes on the 2-core reference machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -427,6 +428,50 @@ pub const CASES: &[Case] = &[
         full_time: RunTime::Long,
         quick_time: RunTime::Minutes,
         run: contact::tank_pile,
+        known_failures: &[],
+    },
+    Case {
+        name: "still-pool",
+        description: "a pool at rest (liquid 0.5 deep under 0.5 of gas, floor and lid) stays at rest: max |u| below 1e-3 sqrt(g H) over 1000 steps, liquid volume within 0.1%",
+        reference: "hydrostatics",
+        full: "2D, h = 1/128, density ratios 1:10, 1:100, 1:1000",
+        quick: "2D, h = 1/64, ratios 1:10 and 1:100",
+        full_time: RunTime::Minutes,
+        quick_time: RunTime::Seconds,
+        run: free_surface::still_pool,
+        known_failures: &[],
+    },
+    Case {
+        name: "standing-wave",
+        description: "a standing wave (wavelength 1, amplitude 0.01, depth 0.5 under 0.5 of gas) oscillates at the two-fluid dispersion frequency within 2%; its amplitude never grows",
+        reference: "linear theory: omega^2 = g k (rho1 - rho2) / (rho1 coth k h1 + rho2 coth k h2)",
+        full: "2D, h = 1/128, 3 periods, ratios 1:10, 1:100, 1:1000",
+        quick: "2D, h = 1/64, 2 periods, ratios 1:10 and 1:100",
+        full_time: RunTime::Minutes,
+        quick_time: RunTime::Seconds,
+        run: free_surface::standing_wave,
+        known_failures: &[],
+    },
+    Case {
+        name: "rayleigh-taylor",
+        description: "heavy over light, Atwood 0.5, single mode of amplitude 0.002 from rest: growth rate within 5% of sqrt(A g k + nu^2 k^4) - nu k^2",
+        reference: "linear theory (Chandrasekhar 1961)",
+        full: "2D, h = 1/64 and 1/128",
+        quick: "2D, h = 1/64",
+        full_time: RunTime::Minutes,
+        quick_time: RunTime::Seconds,
+        run: free_surface::rayleigh_taylor,
+        known_failures: &[],
+    },
+    Case {
+        name: "floating",
+        description: "flat boxes of density 0.25, 0.5, 0.75 settle at Archimedes' draft within one cell; a disk of density 0.5 released under water floats with its centre within one cell of the waterline; a disk of density 2 sinks to the floor",
+        reference: "Archimedes",
+        full: "2D, h = 1/128, ratio 1:1000",
+        quick: "2D, h = 1/64, ratio 1:100",
+        full_time: RunTime::Minutes,
+        quick_time: RunTime::Minutes,
+        run: free_surface::floating,
         known_failures: &[],
     },
 ];
