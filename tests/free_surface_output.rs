@@ -372,3 +372,50 @@ fn time_a_128_cubed_surface_and_slice() {
         png.len()
     );
 }
+
+/// `tumble run` of a 2D scene with a dynamic body writes a slice image per snapshot without
+/// being asked, and its `series.csv` has no liquid columns (no free surface).
+#[test]
+fn a_run_with_a_dynamic_body_writes_its_slices() {
+    use tumble::run::{RunOptions, run_scene};
+    let base = temp("run");
+    let scene = Scene::parse(
+        r#"Scene(
+    name: "slices-2d",
+    domain: (extent: [1.0, 1.0], cells: [32, 32]),
+    fluid: (gravity: [0.0, -1.0]),
+    numerics: (end_time: 0.02),
+    bodies: [(name: "disk", shape: Disk(radius: 0.1), kind: Dynamic, density: 2.0, position: [0.5, 0.6])],
+    output: (every: 0.01),
+)"#,
+        "slices.ron",
+        "slices-2d",
+    )
+    .unwrap();
+    let out = base.join("out");
+    let opts = RunOptions {
+        out: Some(out.clone()),
+        quiet: true,
+        ..Default::default()
+    };
+    run_scene(scene, &opts).unwrap();
+    let pvd = std::fs::read_to_string(out.join("bodies.pvd")).unwrap();
+    let snapshots = pvd.matches("<DataSet").count();
+    assert!(snapshots >= 3, "{pvd}");
+    let mut pngs: Vec<_> = std::fs::read_dir(out.join("slices"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    pngs.sort();
+    let expect: Vec<String> = (0..snapshots)
+        .map(|k| slice_file(k).trim_start_matches("slices/").to_string())
+        .collect();
+    assert_eq!(pngs, expect);
+    let series = std::fs::read_to_string(out.join("series.csv")).unwrap();
+    assert_eq!(
+        series.lines().next(),
+        Some("t,dt,energy,enstrophy,circulation,max_omega")
+    );
+    assert!(!out.join("liquid_volume.png").exists());
+    let _ = std::fs::remove_dir_all(&base);
+}

@@ -5,8 +5,9 @@
 //! In 3D the slice is the x–z plane (z up) through the grid nodes nearest the centre of the
 //! first dynamic body (lowest id), else through the middle of the box; in 2D it is the whole
 //! x–y plane (y up). The colour is the vorticity component normal to the slice (ω_y in 3D, ω
-//! in 2D) on a blue–white–red scale symmetric about 0, whose end is the largest |value| in the
-//! slice (drawn beside it); the inside of the bodies is shaded grey, the free surface's zero
+//! in 2D) on a blue–white–red scale symmetric about 0, whose end is the 99th percentile of
+//! |value| over the slice's nodes outside the bodies (larger values saturate; the colour bar
+//! beside the slice gives the end); the inside of the bodies is shaded grey, the free surface's zero
 //! level (φ_w = 0) is a black line and the bodies' (the union level set φ = 0) a green one.
 //! The title names the scene, the time and where the slice is.
 //!
@@ -169,14 +170,25 @@ pub fn render(input: &SliceInput) -> Result<Vec<u8>> {
         h,
         buf: vec![255; 3 * w as usize * h as usize],
     };
-    // The colour scale: the largest finite |value| in the slice.
-    let mut scale = 0.0f64;
+    // The colour scale: the 99th percentile of |value| over the slice's nodes outside the
+    // bodies (a thin peak at a wall would wash out the wake), else their largest |value|.
+    let mut mags: Vec<f64> = Vec::with_capacity(nx * nv);
     for k in 0..nv {
         for i in 0..nx {
-            let v = input.colour[node(i, k)];
-            if v.is_finite() {
-                scale = scale.max(v.abs());
+            let id = node(i, k);
+            let v = input.colour[id];
+            if v.is_finite() && !input.bodies.is_some_and(|b| b[id] > 0.0) {
+                mags.push(v.abs());
             }
+        }
+    }
+    let max = mags.iter().copied().fold(0.0, f64::max);
+    let mut scale = max;
+    if !mags.is_empty() {
+        let q = (0.99 * (mags.len() - 1) as f64) as usize;
+        let (_, p, _) = mags.select_nth_unstable_by(q, f64::total_cmp);
+        if *p > 0.0 {
+            scale = *p;
         }
     }
     let unit = if scale > 0.0 { scale } else { 1.0 };

@@ -288,6 +288,11 @@ fn continue_run(
     ];
     checkpoint::remove_temp_files(dir)
         .with_context(|| format!("cannot clean up {}", dir.display()))?;
+    let slices = dir.join(crate::io::slices::SLICE_DIR);
+    if slices.is_dir() {
+        checkpoint::remove_temp_files(&slices)
+            .with_context(|| format!("cannot clean up {}", slices.display()))?;
+    }
     // Checkpoints after this one belong to the run this restart replaces.
     checkpoint::remove_after(dir, ck.time.step)
         .with_context(|| format!("cannot remove later checkpoints in {}", dir.display()))?;
