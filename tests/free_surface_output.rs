@@ -169,8 +169,14 @@ fn a_flat_level_is_at_its_height_and_covers_the_box_once() {
 
 /// A small 3D scene: a floor (static box) and a dynamic sphere, 32³ nodes.
 fn scene(name: &str) -> ValidScene {
+    scene_with(name, "")
+}
+
+/// [`scene`] with more `output` settings (`extra`, ending in a comma).
+fn scene_with(name: &str, extra: &str) -> ValidScene {
     Scene::parse(
-        r#"Scene(
+        &format!(
+            r#"Scene(
     name: "fs-out",
     domain: (extent: [1.0, 1.0, 1.0], cells: [32, 32, 32]),
     fluid: (density: 1.0, viscosity: 0.01, gravity: [0.0, 0.0, -1.0]),
@@ -179,8 +185,9 @@ fn scene(name: &str) -> ValidScene {
         (name: "floor", shape: Box(half_extents: [0.6, 0.6, 0.1]), kind: Static, position: [0.5, 0.5, 0.05]),
         (name: "ball", shape: Sphere(radius: 0.12), kind: Dynamic, density: 2.0, position: [0.5, 0.5, 0.4]),
     ],
-    output: (fields: [Omega, Velocity, Density]),
-)"#,
+    output: ({extra} fields: [Omega, Velocity, Density]),
+)"#
+        ),
         "fs.ron",
         name,
     )
@@ -418,4 +425,36 @@ fn a_run_with_a_dynamic_body_writes_its_slices() {
     );
     assert!(!out.join("liquid_volume.png").exists());
     let _ = std::fs::remove_dir_all(&base);
+}
+
+/// With HDF5 output, the snapshot's `fields_000000.h5` holds `/free_surface` (nz, ny, nx) and
+/// `bodies_000000.h5` the free surface's part after the bodies'.
+#[cfg(feature = "hdf5")]
+#[test]
+fn an_hdf5_snapshot_holds_the_free_surface() {
+    let dir = temp("h5");
+    let mut sim = Simulation::new(scene_with("fs", "formats: [Vtk, Hdf5],")).unwrap();
+    let ls = liquid(&sim, 0.6, 0.1);
+    let phi = ls.phi.clone();
+    sim.world.insert_resource(ls);
+    let mut snaps = Snapshots::new(&dir, &sim);
+    snaps.write(&sim).unwrap();
+    let h5 = hdf5::File::open(dir.join("fields_000000.h5")).unwrap();
+    let ds = h5.dataset("free_surface").unwrap();
+    assert_eq!(ds.shape(), [32, 32, 32]);
+    let v: Vec<f32> = ds.read_raw().unwrap();
+    assert!(
+        v.iter()
+            .zip(&phi)
+            .all(|(a, b)| (*a as f64 - b).abs() < 1e-6)
+    );
+    let xmf = std::fs::read_to_string(dir.join("fields.xmf")).unwrap();
+    assert!(xmf.contains("free_surface"), "{xmf}");
+    let b = hdf5::File::open(dir.join("bodies_000000.h5")).unwrap();
+    let names: String = b
+        .attr("part_names")
+        .map(|a| format!("{:?}", a.read_raw::<hdf5::types::VarLenUnicode>().ok()))
+        .unwrap_or_default();
+    assert!(names.contains("free_surface"), "{names}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
