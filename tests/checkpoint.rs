@@ -316,6 +316,20 @@ fn assert_same_outputs(a: &Path, b: &Path) {
             .count()
     };
     assert_eq!(vti(a), vti(b), "{} vs {}", count(a), count(b));
+    // The slice images (a run with a dynamic body): the same files, the same bytes.
+    let slices = |d: &Path| {
+        let mut v: Vec<_> = std::fs::read_dir(d.join("slices"))
+            .map(|r| r.map(|e| e.unwrap().file_name()).collect())
+            .unwrap_or_default();
+        v.sort();
+        v
+    };
+    assert_eq!(slices(a), slices(b), "slices/ differs");
+    for m in slices(a) {
+        let x = std::fs::read(a.join("slices").join(&m)).unwrap();
+        let y = std::fs::read(b.join("slices").join(&m));
+        assert!(y.is_ok_and(|y| y == x), "slices/{m:?} differs");
+    }
 }
 
 /// The long 2D run (to t = 3) that the kill and interrupt tests stop and restart, run once
@@ -856,6 +870,22 @@ fn assert_same_outputs_h5(a: &Path, b: &Path) {
                 assert!(y.get(k) == Some(v), "{n}: {k} differs after the restart");
             }
             assert_eq!(x.len(), y.len(), "{n}: other datasets or attributes");
+        } else if a.join(n).is_dir() {
+            // slices/: the same images.
+            let list = |d: &Path| {
+                let mut v: Vec<_> = std::fs::read_dir(d)
+                    .unwrap()
+                    .map(|e| e.unwrap().file_name())
+                    .collect();
+                v.sort();
+                v
+            };
+            assert_eq!(list(&a.join(n)), list(&b.join(n)), "{n}/ differs");
+            for m in list(&a.join(n)) {
+                let x = std::fs::read(a.join(n).join(&m)).unwrap();
+                let y = std::fs::read(b.join(n).join(&m));
+                assert!(y.is_ok_and(|y| y == x), "{n}/{m:?} differs");
+            }
         } else {
             let (x, y) = (std::fs::read(a.join(n)).unwrap(), std::fs::read(b.join(n)));
             assert!(

@@ -5,9 +5,11 @@ pub mod checkpoint;
 pub mod estimate;
 #[cfg(feature = "hdf5")]
 pub mod hdf5_out;
+pub mod isosurface;
 pub mod output;
 pub mod plot;
 pub mod runlog;
+pub mod slices;
 pub mod snapshots;
 pub mod summary;
 pub mod surfaces;

@@ -36,7 +36,7 @@ static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
 /// The family name the bundled font is registered under. `plotters` asks for "sans-serif"
 /// wherever no font is given explicitly, so the bundled font serves those too.
-const FAMILY: &str = "sans-serif";
+pub(crate) const FAMILY: &str = "sans-serif";
 
 /// Distinct colours (Tableau 10), used in order and then cycled.
 const COLORS: [RGBColor; 10] = [
@@ -172,7 +172,7 @@ fn finite_series<'a>(series: &[Series<'a>]) -> Vec<Drawn<'a>> {
 }
 
 /// Registers the bundled font with `plotters` (once per process).
-fn register_bundled_font() -> Result<()> {
+pub(crate) fn register_bundled_font() -> Result<()> {
     static OK: OnceLock<bool> = OnceLock::new();
     let ok = *OK.get_or_init(|| register_font(FAMILY, FontStyle::Normal, FONT).is_ok());
     ensure!(ok, "the bundled font (DejaVu Sans) could not be loaded");
@@ -379,6 +379,8 @@ pub struct RunInfo {
     pub gravity: [f64; 3],
     /// The scene's bodies, in order.
     pub bodies: Vec<BodyInfo>,
+    /// The scene's dimension, 2 or 3 (3 when there is no readable scene).
+    pub dim: usize,
 }
 
 /// A body of the scene as the plots need it.
@@ -429,6 +431,7 @@ impl RunInfo {
             vacuum: scene.vacuum,
             gravity: scene.gravity(),
             bodies,
+            dim: scene.grid().dim,
         })
     }
 
@@ -563,6 +566,8 @@ fn borrowed(series: &[OwnedSeries]) -> Vec<Series<'_>> {
 ///   curve per body name. The vertical axis is z if the run is 3D (any non-zero `z`, `vz`,
 ///   `wx` or `wy` in the file), else y. Only the first [`MAX_CURVES`] names get a curve; the
 ///   title then says how many were plotted.
+/// - `series.csv` with a `liquid_volume` column (a run with a free surface) →
+///   `liquid_volume.png`.
 /// - `contacts.csv` (if present and not empty) → `contacts_gap.png`: [`gap_series`].
 ///
 /// Titles name the scene (`scene.ron`'s name, else the folder's) and axis labels carry the
@@ -636,6 +641,30 @@ pub fn plot_run_dir(dir: &Path) -> Result<Vec<PathBuf>> {
             )?;
             written.push(path);
         }
+    }
+
+    // A run with a free surface: its liquid volume (an area in 2D) against t.
+    if table.header.contains(&"liquid_volume") {
+        let values = table.column("liquid_volume")?;
+        let path = dir.join("liquid_volume.png");
+        line_chart(
+            &path,
+            &chart_title("Liquid volume ∫H(φ_w)", &info.name),
+            &t_label,
+            &axis_label(
+                "liquid volume",
+                units,
+                if info.dim == 2 { 2 } else { 3 },
+                0,
+                0,
+            ),
+            &[Series {
+                label: "liquid_volume",
+                points: t.iter().copied().zip(values).collect(),
+                style: Style::Line,
+            }],
+        )?;
+        written.push(path);
     }
 
     let bodies_csv = dir.join("bodies.csv");

@@ -9,10 +9,17 @@
 //! surfaces, computed once, [`SurfaceGeometry`]); a run whose scene asks for no field
 //! (`fields: []`) writes no `.vti` (they would be empty) and no `fields.pvd`.
 //!
+//! With a free surface (the world holds a [`LiquidLevelSet`]), every snapshot's fields also
+//! hold `free_surface` (φ_w), the surfaces series also holds its zero level as a part named
+//! `free_surface` (world coordinates, identity pose, zero vectors; see
+//! [`crate::io::isosurface`]), and, as in a run with a dynamic body, every snapshot also
+//! writes a slice image `slices/slice_NNNNNN.png` ([`crate::io::slices`]).
+//!
 //! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
 //! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
 //! (the snapshots written after the checkpoint removed, the indexes and `series.h5` rewritten).
 
+use crate::bodies::free_surface::LiquidLevelSet;
 use crate::bodies::{Body, BodySurface, Hydro, RigidState};
 use crate::io::checkpoint::RunProgress;
 use crate::io::output::{PvdSeries, VtkField, write_vti_compressed};
@@ -26,8 +33,10 @@ use std::path::{Path, PathBuf};
 pub struct Snapshots {
     dir: PathBuf,
     pvd: Option<PvdSeries>,
-    /// The bodies' surfaces (a run with bodies).
+    /// The bodies' surfaces and the free surface's zero level (a run with either).
     surfaces: Option<SurfaceSeries>,
+    /// Whether every snapshot writes a slice image (a free surface or a dynamic body).
+    slices: bool,
     #[cfg(feature = "hdf5")]
     hdf5: Option<Hdf5Outputs>,
     count: usize,
@@ -42,10 +51,19 @@ fn vtk_fields(sim: &Simulation) -> bool {
     sim.scene().output.has_format(OutputFormat::Vtk) && with_fields(sim, |f| !f.is_empty())
 }
 
-/// The body-surface series of `sim`'s run in `dir`, if it has bodies.
-fn surface_series(dir: &Path, sim: &Simulation) -> Option<SurfaceSeries> {
-    (!sim.scene().bodies.is_empty()).then(|| SurfaceSeries::new(dir, "bodies", &SURFACE_VECTORS))
+/// Whether `sim`'s snapshots hold surfaces: it has bodies or a free surface.
+fn has_surfaces(sim: &Simulation) -> bool {
+    !sim.scene().bodies.is_empty() || sim.world.contains_resource::<LiquidLevelSet>()
 }
+
+/// The surface series of `sim`'s run in `dir` (`bodies.pvd`), if it has bodies or a free
+/// surface.
+fn surface_series(dir: &Path, sim: &Simulation) -> Option<SurfaceSeries> {
+    has_surfaces(sim).then(|| SurfaceSeries::new(dir, "bodies", &SURFACE_VECTORS))
+}
+
+/// The name of the free surface's part in the surfaces series.
+pub const FREE_SURFACE_PART: &str = "free_surface";
 
 /// The time a body-surface snapshot `file` holds (its `TimeValue` field data).
 fn vtp_time(file: &Path) -> Result<f64, String> {
@@ -65,6 +83,7 @@ impl Snapshots {
             dir: dir.to_path_buf(),
             pvd: vtk_fields(sim).then(|| PvdSeries::new(dir.join("fields.pvd"))),
             surfaces: surface_series(dir, sim),
+            slices: crate::io::slices::wants_slices(sim),
             #[cfg(feature = "hdf5")]
             hdf5: sim
                 .scene()
@@ -130,6 +149,7 @@ impl Snapshots {
             dir: dir.to_path_buf(),
             pvd,
             surfaces,
+            slices: crate::io::slices::wants_slices(sim),
             #[cfg(feature = "hdf5")]
             hdf5,
             count,
@@ -137,7 +157,8 @@ impl Snapshots {
     }
 
     /// Make the run directory match a resumed [`Snapshots`]: remove the snapshot files
-    /// numbered from [`count`](Snapshots::count) on (written after the checkpoint), rewrite
+    /// numbered from [`count`](Snapshots::count) on (written after the checkpoint, slice
+    /// images included), rewrite
     /// `fields.pvd`, `bodies.pvd`, `fields.xmf` and `bodies.xmf` with the snapshots kept, and cut
     /// `series.h5` back to the steps up to the checkpoint.
     pub fn cut_back(&mut self) -> anyhow::Result<()> {
@@ -148,6 +169,7 @@ impl Snapshots {
                 "fields_{k}.h5",
                 "bodies_{k}.vtp",
                 "bodies_{k}.h5",
+                "slices/slice_{k}.png",
             ] {
                 let f = self.dir.join(name.replace("{k}", &format!("{k:06}")));
                 if f.exists() {
@@ -249,6 +271,9 @@ impl Snapshots {
             written.push(file);
             surfaces = Some(g);
         }
+        if self.slices {
+            written.push(crate::io::slices::write_slice(&self.dir, self.count, sim)?);
+        }
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.hdf5.as_mut() {
             written.extend(h.snapshot(&self.dir, self.count, sim, vtk, surfaces.as_ref())?);
@@ -271,8 +296,9 @@ impl Snapshots {
 }
 
 /// Snapshot `index` of the bodies' surfaces, each at its pose with its velocity, angular
-/// velocity and hydrodynamic force, in body-id order; returns the file name and the surfaces
-/// (in world space, for the other formats).
+/// velocity and hydrodynamic force, in body-id order, then with a free surface its zero level
+/// (part [`FREE_SURFACE_PART`], zero vectors); returns the file name and the surfaces (in
+/// world space, for the other formats).
 fn write_surfaces(
     series: &mut SurfaceSeries,
     index: usize,
@@ -284,7 +310,7 @@ fn write_surfaces(
         .map(|mut q| q.iter(world).collect())
         .unwrap_or_default();
     bodies.sort_by_key(|(b, ..)| b.id);
-    let parts: Vec<SurfacePart> = bodies
+    let mut parts: Vec<SurfacePart> = bodies
         .iter()
         .map(|(b, st, h, surf)| SurfacePart {
             name: &b.name,
@@ -294,6 +320,18 @@ fn write_surfaces(
             vectors: vec![st.velocity, st.angular_velocity, h.force],
         })
         .collect();
+    let free = world
+        .get_resource::<LiquidLevelSet>()
+        .map(|l| crate::io::isosurface::zero_level(sim.grid(), &l.phi));
+    if let Some(mesh) = &free {
+        parts.push(SurfacePart {
+            name: FREE_SURFACE_PART,
+            mesh,
+            center: glam::DVec3::ZERO,
+            orientation: glam::DQuat::IDENTITY,
+            vectors: vec![glam::DVec3::ZERO; SURFACE_VECTORS.len()],
+        });
+    }
     let g = SurfaceGeometry::new(&parts, series.vector_names()).context("body surfaces")?;
     let file = series
         .write_geometry(index, sim.time(), &g)
@@ -304,7 +342,9 @@ fn write_surfaces(
 /// Call `f` with the fields of a snapshot of `sim`, in the scene's `output.fields` order:
 /// `omega`, `velocity`, and with bodies `density`, `chi`, `phi` (φ clamped below at minus the
 /// band kept around each body, [`crate::bodies::band`]: where no body's band reaches, φ is
-/// -∞ in memory and readers choke on infinities and sentinels).
+/// -∞ in memory and readers choke on infinities and sentinels); then, with a free surface
+/// whose φ_w has one value per node and a scene asking for some field, `free_surface`
+/// (φ_w, > 0 in the liquid).
 fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
     let fl = sim.fields();
     let omega: Vec<&[f64]> = fl.omega().iter().map(|c| c.as_slice()).collect();
@@ -333,6 +373,18 @@ fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
                 }
             }
         }
+    }
+    let liquid: Vec<&[f64]> = sim
+        .world
+        .get_resource::<LiquidLevelSet>()
+        .filter(|l| l.phi.len() == sim.grid().len())
+        .map(|l| vec![l.phi.as_slice()])
+        .unwrap_or_default();
+    if !liquid.is_empty() && !sim.scene().output.fields.is_empty() {
+        vtk.push(VtkField {
+            name: "free_surface",
+            components: &liquid,
+        });
     }
     f(&vtk)
 }
@@ -390,7 +442,7 @@ impl Hdf5Outputs {
         Hdf5Outputs {
             xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), sim.grid())
                 .with_precision(sim.scene().output.precision),
-            bodies: (!scene.bodies.is_empty()).then(|| {
+            bodies: has_surfaces(sim).then(|| {
                 crate::io::xdmf::SurfaceXdmf::new(
                     dir.join("bodies.xmf"),
                     &SURFACE_VECTORS,

@@ -2,7 +2,7 @@
 //! in its current pose, indexed by a `.pvd` time series that opens beside the fields.
 //!
 //! A part is anything with a surface: a rigid body (its shape's tessellation in the body frame,
-//! placed at the body's pose) or, later, a free surface (its zero level set, in world
+//! placed at the body's pose) or a free surface (its zero level set, in world
 //! coordinates with the identity pose). Each cell carries the part's index (`part_id`, into
 //! the field-data array `part_names`) and the part's vectors (velocity, force, ...), so
 //! ParaView can colour the surfaces by any of them.

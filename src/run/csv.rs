@@ -2,16 +2,75 @@
 //! moving body per step) and `contacts.csv` (one row per close pair per step).
 
 use crate::base::fields::Sample;
+use crate::bodies::free_surface::LiquidLevelSet;
 use crate::io::output::CsvWriter;
 use crate::sim::engine::Simulation;
 use anyhow::Context;
 use std::path::Path;
 
-/// Append the state `s` to `series.csv`.
-pub fn write_row(series: &mut CsvWriter, s: &Sample) -> anyhow::Result<()> {
-    series
-        .row(&[s.t, s.dt, s.energy, s.enstrophy, s.circulation, s.max_omega])
-        .context("cannot write series.csv")
+/// The columns of `series.csv` every run has.
+pub const SERIES_COLUMNS: [&str; 6] =
+    ["t", "dt", "energy", "enstrophy", "circulation", "max_omega"];
+
+/// The columns `series.csv` adds in a run with a free surface: the liquid volume
+/// ∫H_ε(φ_w) dV (an area in 2D) and the interface area ∫δ_ε(φ_w) dV (a length in 2D), from
+/// the [`LiquidLevelSet`] after each step.
+pub const LIQUID_COLUMNS: [&str; 2] = ["liquid_volume", "liquid_area"];
+
+/// `series.csv`: one row per step, [`SERIES_COLUMNS`], then [`LIQUID_COLUMNS`] if the run has
+/// a free surface (its world holds a [`LiquidLevelSet`] when the file is created or, after a
+/// restart, opened: the restored simulation has it if the run had it, so the columns stay the
+/// same).
+pub struct SeriesCsv {
+    w: CsvWriter,
+    liquid: bool,
+}
+
+impl SeriesCsv {
+    /// The header of `sim`'s `series.csv`.
+    pub fn header(sim: &Simulation) -> Vec<&'static str> {
+        let mut h = SERIES_COLUMNS.to_vec();
+        if sim.world.contains_resource::<LiquidLevelSet>() {
+            h.extend(LIQUID_COLUMNS);
+        }
+        h
+    }
+
+    /// Create `path` with `sim`'s header.
+    pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Self> {
+        let header = Self::header(sim);
+        Ok(SeriesCsv {
+            liquid: header.len() > SERIES_COLUMNS.len(),
+            w: CsvWriter::create(path, &header).context("cannot create series.csv")?,
+        })
+    }
+
+    /// Open the `series.csv` of an earlier run of `sim` to append to it (a restart).
+    pub fn append(path: &Path, sim: &Simulation) -> anyhow::Result<Self> {
+        let header = Self::header(sim);
+        Ok(SeriesCsv {
+            liquid: header.len() > SERIES_COLUMNS.len(),
+            w: CsvWriter::append(path, header.len()).context("cannot open series.csv")?,
+        })
+    }
+
+    /// Append `sim`'s current state.
+    pub fn row(&mut self, sim: &Simulation) -> anyhow::Result<()> {
+        let s: Sample = sim.sample();
+        let mut v = vec![s.t, s.dt, s.energy, s.enstrophy, s.circulation, s.max_omega];
+        if self.liquid {
+            // A free surface that went away writes NaN: the columns stay the same.
+            let l = sim.world.get_resource::<LiquidLevelSet>();
+            v.push(l.map_or(f64::NAN, |l| l.volume));
+            v.push(l.map_or(f64::NAN, |l| l.area));
+        }
+        self.w.row(&v).context("cannot write series.csv")
+    }
+
+    /// Flush to disk.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        self.w.flush().context("cannot write series.csv")
+    }
 }
 
 /// A CSV file written through the `csv` crate: a body name with a comma, a quote or a line

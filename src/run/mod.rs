@@ -3,7 +3,7 @@
 
 use crate::base::fields::Sample;
 use crate::io::checkpoint::{self, Checkpoint, CheckpointError, Interrupted, RunProgress};
-use crate::io::output::{CsvWriter, atomic_write};
+use crate::io::output::atomic_write;
 use crate::io::runlog::RunLog;
 use crate::io::snapshots::Snapshots;
 use crate::scene::{Scene, ValidScene};
@@ -13,8 +13,7 @@ use anyhow::Context;
 pub mod csv;
 pub mod outdir;
 
-use csv::write_row;
-pub use csv::{BODIES_HEADER, BodiesCsv, CONTACTS_HEADER, ContactsCsv};
+pub use csv::{BODIES_HEADER, BodiesCsv, CONTACTS_HEADER, ContactsCsv, SeriesCsv};
 use indicatif::{ProgressBar, ProgressStyle};
 pub use outdir::{MARKER, prepare_dir};
 use std::io::IsTerminal;
@@ -107,7 +106,7 @@ fn log_error(e: &anyhow::Error) {
 struct Run {
     sim: Simulation,
     dir: PathBuf,
-    series: CsvWriter,
+    series: SeriesCsv,
     bodies_csv: Option<BodiesCsv>,
     contacts_csv: Option<ContactsCsv>,
     /// The field snapshots (VTK and/or HDF5, with their indexes) and `series.h5`.
@@ -156,17 +155,13 @@ fn start_run(scene: ValidScene, opts: &RunOptions, dir: PathBuf) -> anyhow::Resu
     let end = scene.numerics.end_time;
     let every = scene.output.every;
     let mut sim = Simulation::new(scene)?;
-    let mut series = CsvWriter::create(
-        &dir.join("series.csv"),
-        &["t", "dt", "energy", "enstrophy", "circulation", "max_omega"],
-    )
-    .context("cannot create series.csv")?;
+    let mut series = SeriesCsv::create(&dir.join("series.csv"), &sim)?;
     let mut bodies_csv = BodiesCsv::create(&dir.join("bodies.csv"), &sim)?;
     let contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
     let mut snaps = Snapshots::new(&dir, &sim);
     snaps.record(&mut sim);
     write_snapshot(&sim, &mut snaps)?;
-    write_row(&mut series, &sim.sample())?;
+    series.row(&sim)?;
     if let Some(b) = bodies_csv.as_mut() {
         b.rows(&mut sim)?;
     }
@@ -293,6 +288,11 @@ fn continue_run(
     ];
     checkpoint::remove_temp_files(dir)
         .with_context(|| format!("cannot clean up {}", dir.display()))?;
+    let slices = dir.join(crate::io::slices::SLICE_DIR);
+    if slices.is_dir() {
+        checkpoint::remove_temp_files(&slices)
+            .with_context(|| format!("cannot clean up {}", slices.display()))?;
+    }
     // Checkpoints after this one belong to the run this restart replaces.
     checkpoint::remove_after(dir, ck.time.step)
         .with_context(|| format!("cannot remove later checkpoints in {}", dir.display()))?;
@@ -308,7 +308,7 @@ fn continue_run(
     snaps.cut_back()?;
     atomic_write(&dir.join("scene.ron"), sim.scene().to_ron().as_bytes())
         .context("cannot write scene.ron")?;
-    let series = CsvWriter::append(&dir.join("series.csv"), 6).context("cannot open series.csv")?;
+    let series = SeriesCsv::append(&dir.join("series.csv"), &sim)?;
     let bodies_csv = match p.bodies_len {
         Some(_) => Some(BodiesCsv::append(&dir.join("bodies.csv"))?),
         None => None,
@@ -349,7 +349,7 @@ impl Run {
     /// Write a checkpoint of the current state (after flushing and syncing the time series it
     /// records the lengths of, and writing `series.h5`, which a restart reads back).
     fn checkpoint(&mut self) -> anyhow::Result<()> {
-        self.series.flush().context("cannot write series.csv")?;
+        self.series.flush()?;
         if let Some(b) = self.bodies_csv.as_mut() {
             b.flush()?;
         }
@@ -462,7 +462,7 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
                 return Err(run.failed(e));
             }
             let sim = &mut run.sim;
-            write_row(&mut run.series, &sim.sample())?;
+            run.series.row(sim)?;
             if let Some(b) = run.bodies_csv.as_mut() {
                 b.rows(sim)?;
             }
@@ -536,7 +536,7 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
         mut snaps,
         ..
     } = run;
-    series.flush().context("cannot write series.csv")?;
+    series.flush()?;
     if let Some(b) = bodies_csv.as_mut() {
         b.flush()?;
     }
