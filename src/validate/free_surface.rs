@@ -301,7 +301,7 @@ pub fn floating(quick: bool) -> anyhow::Result<Report> {
     let scene = tank(
         "floating",
         3.0,
-        1.2,
+        1.25,
         h,
         gas,
         &format!("[Below(height: {level})]"),
