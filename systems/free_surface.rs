@@ -148,7 +148,10 @@ pub fn redistance(
     scratch.phi0.copy_from_slice(&ls.phi);
     let phi0 = &scratch.phi0;
     let nb = |i: usize, n: usize| -> (usize, usize) {
-        (if i == 0 { n - 1 } else { i - 1 }, if i + 1 == n { 0 } else { i + 1 })
+        (
+            if i == 0 { n - 1 } else { i - 1 },
+            if i + 1 == n { 0 } else { i + 1 },
+        )
     };
     for _ in 0..iterations {
         let phi = &ls.phi;
@@ -212,12 +215,7 @@ pub fn redistance(
 }
 
 /// ∫H_ε(φ) dV and ∫δ_ε(φ) dV, summed row by row in a fixed order.
-pub fn volume_and_area(
-    grid: &Grid,
-    phi: &[f64],
-    partial: &mut [[f64; 2]],
-    eps: f64,
-) -> (f64, f64) {
+pub fn volume_and_area(grid: &Grid, phi: &[f64], partial: &mut [[f64; 2]], eps: f64) -> (f64, f64) {
     let nx = grid.n[0];
     partial
         .par_iter_mut()
@@ -264,9 +262,10 @@ pub fn restore_volume(
         }
         let shift = (ls.target_volume - v) / a;
         let band = ls.band;
-        ls.phi
-            .par_chunks_mut(4096)
-            .for_each(|c| c.iter_mut().for_each(|p| *p = (*p + shift).clamp(-band, band)));
+        ls.phi.par_chunks_mut(4096).for_each(|c| {
+            c.iter_mut()
+                .for_each(|p| *p = (*p + shift).clamp(-band, band))
+        });
     }
     let (v, a) = volume_and_area(grid, &ls.phi, &mut scratch.partial, eps);
     ls.volume = v;

@@ -133,9 +133,7 @@ pub(crate) fn check_tank(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) ->
             p[1] = grid.origin[1] + (b as f64 + 0.5) / m as f64 * ext[1];
         }
         p[up] = grid.origin[up];
-        let covered = walls
-            .iter()
-            .any(|(g, c, inv)| g.phi(*inv * (p - *c)) > 0.0);
+        let covered = walls.iter().any(|(g, c, inv)| g.phi(*inv * (p - *c)) > 0.0);
         if !covered {
             let axis = if dim == 2 { "y" } else { "z" };
             let at = p.to_array()[..dim]

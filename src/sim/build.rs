@@ -152,7 +152,11 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
 /// The scene's free surface, if it has one: its entity and the liquid's level set at t = 0
 /// (the union of the liquid regions, φ_w = max over regions, clipped to the band; the
 /// `free_surface` plugin redistances it before the first step). Returns whether there is one.
-pub fn spawn_free_surface(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyhow::Result<bool> {
+pub fn spawn_free_surface(
+    world: &mut World,
+    scene: &ValidScene,
+    grid: &Grid,
+) -> anyhow::Result<bool> {
     use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
     use crate::scene::LiquidRegion;
     let Some(spec) = &scene.free_surface else {

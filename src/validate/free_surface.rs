@@ -66,7 +66,11 @@ pub fn surface_height(sim: &Simulation, i: usize, guess: f64) -> f64 {
 }
 
 fn ratios(quick: bool) -> &'static [f64] {
-    if quick { &[10.0, 100.0] } else { &[10.0, 100.0, 1000.0] }
+    if quick {
+        &[10.0, 100.0]
+    } else {
+        &[10.0, 100.0, 1000.0]
+    }
 }
 
 /// A pool at rest stays at rest: max |u| < 1e-3 √(g H) over 1000 steps, volume within 0.1%.
@@ -97,7 +101,10 @@ pub fn still_pool(quick: bool) -> anyhow::Result<Report> {
             drift = drift.max((ls.volume / ls.target_volume - 1.0).abs());
         }
         rep.rows.push(Row::abs(
-            format!("1:{r} pool, h = 1/{}: max |u| / sqrt(g H) over 1000 steps", 1.0 / h),
+            format!(
+                "1:{r} pool, h = 1/{}: max |u| / sqrt(g H) over 1000 steps",
+                1.0 / h
+            ),
             0.0,
             umax / (g * depth).sqrt(),
             1e-3,
@@ -253,7 +260,10 @@ pub fn rayleigh_taylor(quick: bool) -> anyhow::Result<Report> {
             }
         }
         rep.rows.push(Row::rel(
-            format!("h = 1/{}: growth rate sigma from cosh(sigma t) at 10 times the start", 1.0 / h),
+            format!(
+                "h = 1/{}: growth rate sigma from cosh(sigma t) at 10 times the start",
+                1.0 / h
+            ),
             sigma,
             measured,
             0.05,
@@ -268,7 +278,10 @@ pub fn rayleigh_taylor(quick: bool) -> anyhow::Result<Report> {
             .measured("tumble", series.clone())
             .reference(
                 "cosh(sigma t), linear theory",
-                series.iter().map(|&(t, _)| (t, (sigma * t).cosh())).collect(),
+                series
+                    .iter()
+                    .map(|&(t, _)| (t, (sigma * t).cosh()))
+                    .collect(),
             ),
         );
     }
@@ -319,8 +332,21 @@ pub fn floating(quick: bool) -> anyhow::Result<Report> {
         .iter()
         .map(|x| (x / h).round() as usize)
         .collect();
+    // A velocity 10 times the free-fall speed over the tank's height is a blow-up: the case
+    // stops there and shows it as a failing row (the rest of the run would crawl at a
+    // collapsed time step).
+    let limit = 10.0 * (2.0 * g * 1.25f64).sqrt();
     while sim.time() < end - 1e-12 {
         sim.step()?;
+        let umax = sim.sample().max_u;
+        if umax.is_nan() || umax >= limit {
+            let t = sim.time();
+            rep.rows.push(Row::yes_no(
+                format!("the run reaches t = {end} without blowing up (max |u| passed {limit:.2} at t = {t:.3})"),
+                false,
+            ));
+            return Ok(rep);
+        }
         if sim.time() >= 0.75 * end {
             let states = crate::io::checkpoint::body_states(&mut sim);
             let y = |name: &str| {
@@ -335,13 +361,25 @@ pub fn floating(quick: bool) -> anyhow::Result<Report> {
                 .map(|&c| surface_height(&sim, c, level))
                 .sum::<f64>()
                 / cols.len() as f64;
-            let vals = [y("box0"), y("box1"), y("box2"), y("light"), y("heavy"), water, 0.0];
+            let vals = [
+                y("box0"),
+                y("box1"),
+                y("box2"),
+                y("light"),
+                y("heavy"),
+                water,
+                0.0,
+            ];
             for (s, v) in sums.iter_mut().zip(vals) {
                 *s += v;
             }
             count += 1;
         }
     }
+    rep.rows.push(Row::yes_no(
+        format!("the run reaches t = {end} without blowing up"),
+        true,
+    ));
     let mean: Vec<f64> = sums.iter().map(|s| s / count.max(1) as f64).collect();
     let water = mean[5];
     for (i, (rho, _)) in boxes.iter().enumerate() {
