@@ -25,7 +25,7 @@
 //! penalization moves, where u is the flow's velocity now and P_e = ∫(ρ - ρ_P) w ũ the
 //! momentum of the body's mass beyond the fluid's at the end of the last step here, ũ being
 //! the velocity this system leaves before transport and diffusion (`PressureState::excess`,
-//! as momentum and angular momentum): the body's excess mass
+//! per unit of that mass, and the same for the angular momentum): the body's excess mass
 //! keeps the velocity the projection gave it, and the flow's change since then (transport,
 //! diffusion, the velocity solve) acts on the fluid's share. That is the viscous force of a
 //! fluid of dynamic viscosity ρ_P ν on the body. P_e is taken over the region the body
@@ -75,18 +75,14 @@ pub const TOLERANCE: f64 = 1e-9;
 pub const MAX_ITERATIONS: usize = 2000;
 
 /// The momentum a dynamic body's mass beyond the fluid's had at the end of the last step's
-/// projection: it travels with the body to the next step. Kept as momentum, not per unit of
-/// that mass: the excess mass ∫(ρ - ρ_P) w passes through zero for a body floating at its
-/// waterline (its mass equals the liquid it displaces), where a velocity per unit mass is
-/// singular (a floating box's rigid velocity jumped to 1e4 in one step).
+/// projection, per unit of that mass: it travels with the body to the next step.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ExcessMomentum {
-    /// Its momentum, ∫(ρ - ρ_P) w ũ.
-    pub momentum: DVec3,
-    /// Its angular momentum about `center`, ∫(ρ - ρ_P) w (x - center) × ũ.
-    pub angular: DVec3,
-    /// The body's centre when it was taken.
-    pub center: DVec3,
+    /// Its mean velocity, ∫(ρ - ρ_P) w ũ / ∫(ρ - ρ_P) w.
+    pub velocity: DVec3,
+    /// Its angular momentum about its own centroid per unit mass,
+    /// ∫(ρ - ρ_P) w r × ũ / ∫(ρ - ρ_P) w.
+    pub spin: DVec3,
 }
 
 /// What the pressure projection carries from one step to the next (checkpointed): the last
@@ -98,7 +94,11 @@ pub struct PressureState {
     /// Per body (indexed by `Body::id`; `None` for the others and before the first
     /// projection): the momentum of its mass beyond the fluid's, from ũ = u + the projected
     /// increments over the region its penalization moved (see the module doc).
-    pub excess: Vec<Option<ExcessMomentum>>,
+    /// Split by the sign of ρ - ρ_P: [the part heavier than the fluid phase, the lighter
+    /// part], each a mean over a weight of one sign. (One mean over the whole excess mass
+    /// divides by ∫(ρ - ρ_P) w, which passes through zero for a body floating at its
+    /// waterline: a floating box's rigid velocity jumped to 1e4 in one step.)
+    pub excess: Vec<Option<[ExcessMomentum; 2]>>,
 }
 
 /// The pressure solver's scratch: the face coefficients and the conjugate-gradient vectors,
@@ -413,25 +413,21 @@ pub fn pressure(
             state.excess.resize(body.id + 1, None);
         }
         let (rho, phase) = (&bf.rho, &bf.rho_phase);
-        let (m, xe, p, l, _) = integrate(
-            &grid,
-            patch,
-            st.center,
-            &solver.trial,
-            &mut sums,
-            |c, _, g| (rho[g] - phase[g]) * penalized_weight(ldt, c),
-        );
-        // (l is about the weights' centroid xe: moved to the body's centre, which stays
-        // defined when the excess mass m passes through zero.)
-        state.excess[body.id] = Some(ExcessMomentum {
-            momentum: p,
-            angular: if m != 0.0 {
-                l + (xe - st.center).cross(p)
+        let part = |sign: f64, sums: &mut BodySums| {
+            let (m, _, p, l, _) =
+                integrate(&grid, patch, st.center, &solver.trial, sums, |c, _, g| {
+                    (sign * (rho[g] - phase[g])).max(0.0) * penalized_weight(ldt, c)
+                });
+            if m != 0.0 {
+                ExcessMomentum {
+                    velocity: p / m,
+                    spin: l / m,
+                }
             } else {
-                DVec3::ZERO
-            },
-            center: st.center,
-        });
+                ExcessMomentum::default()
+            }
+        };
+        state.excess[body.id] = Some([part(1.0, &mut sums), part(-1.0, &mut sums)]);
     }
 }
 

@@ -244,23 +244,24 @@ pub fn rigid_velocity(
         );
         // The excess mass's share: its momentum from the last projection in place of the
         // flow's now, ∫(ρ - ρ_P) w u (angular momenta about the centroid of ρw).
-        if let Some(Some(e)) = excess.map(|x| x.get(body.id).copied().flatten()) {
-            let (_, xe, pu, lu, _) = integrate(
-                &grid,
-                patch,
-                state.center,
-                &fields.u,
-                &mut sums,
-                |c, _, g| (rho[g] - phase[g]) * weight(c),
-            );
-            // Both angular momenta about the body's centre now, then about the centroid of
-            // ρw (no division by the excess mass, which is zero for a floating body).
-            let c = state.center;
-            let lu_c = lu + (xe - c).cross(pu);
-            let le_c = e.angular - (c - e.center).cross(e.momentum);
-            let arm = wcentroid - c;
-            mom += e.momentum - pu;
-            ang += (le_c - arm.cross(e.momentum)) - (lu_c - arm.cross(pu));
+        // Each sign of ρ - ρ_P apart (see `PressureState::excess`).
+        if let Some(Some(parts)) = excess.map(|x| x.get(body.id).copied().flatten()) {
+            for (e, sign) in parts.iter().zip([1.0, -1.0]) {
+                let (me, xe, pu, lu, _) = integrate(
+                    &grid,
+                    patch,
+                    state.center,
+                    &fields.u,
+                    &mut sums,
+                    |c, _, g| sign * (sign * (rho[g] - phase[g])).max(0.0) * weight(c),
+                );
+                if me != 0.0 {
+                    let pe = me * e.velocity;
+                    let arm = xe - wcentroid;
+                    mom += pe - pu;
+                    ang += me * e.spin + arm.cross(pe) - (lu + arm.cross(pu));
+                }
+            }
         }
         if wvol <= 0.0 {
             continue;

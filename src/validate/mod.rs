@@ -489,7 +489,7 @@ pub const CASES: &[Case] = &[
             row: "the run reaches t = 24 without blowing up",
             quick: true,
             full: true,
-            why: "blows up at t = 4.37 (1:100, h = 1/64): a single box of density 0.5 floats stably at its draft, but with the five bodies one body's rigid velocity jumps within a step (not yet understood; the same happens to the cup at 64^3 after it enters the water); issue 17",
+            why: "blows up at t = 4.46 (1:100, h = 1/64): a single box of density 0.5 floats stably at its draft (centre 0.6003 over t = 3), but with the five bodies one body's rigid velocity jumps within a step (not yet understood; the same happens to the cup at 64^3 after it enters the water); issue 17",
         }],
     },
 ];
