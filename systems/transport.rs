@@ -91,11 +91,6 @@ impl TransportScratch {
         self.reverse
     }
 
-    /// The velocity that carried the particles in the last step (u^{n+1/2}), per component.
-    pub fn u_mid(&self) -> &[Vec<f64>] {
-        &self.u_mid
-    }
-
     /// Set the order of the next step's sweeps (restoring a checkpoint).
     pub fn set_reverse(&mut self, reverse: bool) {
         self.reverse = reverse;

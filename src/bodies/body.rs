@@ -349,6 +349,17 @@ pub fn angular3(v: &[f64]) -> DVec3 {
     }
 }
 
+/// The orientation a scene's rotation vector gives (axis times angle; 1 entry in 2D, 3 in
+/// 3D): identity for a zero or empty vector.
+pub fn rotation(v: &[f64]) -> glam::DQuat {
+    let r = angular3(v);
+    if r.length() > 0.0 {
+        glam::DQuat::from_scaled_axis(r)
+    } else {
+        glam::DQuat::IDENTITY
+    }
+}
+
 /// The band (length) kept around each body's reference level set: the collision and
 /// interface computations need φ a few cells outside the body.
 pub fn band(grid: &Grid) -> f64 {

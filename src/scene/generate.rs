@@ -654,12 +654,7 @@ fn pack(
     let mut walls = Vec::new();
     for b in existing {
         let center = crate::bodies::vec3(&b.position);
-        let r = crate::bodies::angular3(&b.rotation);
-        let q = if r.length() > 0.0 {
-            DQuat::from_scaled_axis(r)
-        } else {
-            DQuat::IDENTITY
-        };
+        let q = crate::bodies::rotation(&b.rotation);
         let geom = b.shape.build(base_dir).map_err(|m| Issue::new(&[], m))?;
         match bounding_radius(&b.shape, base_dir).map_err(|m| Issue::new(&[], m))? {
             Some(radius) if radius <= rmax => hash.insert(Ball { center, radius }),

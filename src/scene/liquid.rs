@@ -112,12 +112,7 @@ pub(crate) fn check_tank(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) ->
         .zip(geoms)
         .filter(|(b, _)| matches!(b.kind, BodyKind::Static))
         .map(|(b, g)| {
-            let r = crate::bodies::angular3(&b.rotation);
-            let q = if r.length() > 0.0 {
-                DQuat::from_scaled_axis(r)
-            } else {
-                DQuat::IDENTITY
-            };
+            let q = crate::bodies::rotation(&b.rotation);
             (g, crate::bodies::vec3(&b.position), q.inverse())
         })
         .collect();

@@ -52,12 +52,7 @@ pub fn initial_overlap(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> O
         .iter()
         .zip(geoms)
         .map(|(b, g)| {
-            let r = crate::bodies::angular3(&b.rotation);
-            let q = if r.length() > 0.0 {
-                DQuat::from_scaled_axis(r)
-            } else {
-                DQuat::IDENTITY
-            };
+            let q = crate::bodies::rotation(&b.rotation);
             Placed {
                 geom: g,
                 center: crate::bodies::vec3(&b.position),

@@ -11,7 +11,7 @@ use crate::bodies::{
 };
 use crate::scene::ValidScene;
 use bevy_ecs::prelude::*;
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DMat3, DVec3};
 
 /// Parameters of a validated scene.
 pub fn params(scene: &ValidScene) -> Params {
@@ -81,14 +81,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             matches!(spec.kind, BodyKind::Dynamic),
         );
         let density = spec.density.unwrap_or(rho_f);
-        let orientation = {
-            let r = angular3(&spec.rotation);
-            if r.length() > 0.0 {
-                DQuat::from_scaled_axis(r)
-            } else {
-                DQuat::IDENTITY
-            }
-        };
+        let orientation = crate::bodies::rotation(&spec.rotation);
         let (velocity, angular_velocity) = match &spec.kind {
             BodyKind::Dynamic => (vec3(&spec.velocity), angular3(&spec.angular_velocity)),
             BodyKind::Static => (DVec3::ZERO, DVec3::ZERO),
