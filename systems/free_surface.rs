@@ -25,17 +25,25 @@
 //!   (J. Comput. Phys. 163 (2000)) at the nodes next to the interface: there φ is relaxed to
 //!   D = φ⁰/|∇φ⁰|, the distance the linear interpolation of φ⁰ gives, so the zero level does not
 //!   move. Two iterations per step; many at the start.
+//! * Walls: inside a static body φ_w is not the flow's but the fluid's continued along the
+//!   wall's normal, φ_w(x) = φ_w(x + (φ_s(x) + h) n) with φ_s the walls' signed distance and
+//!   n its outward normal (a 90° contact angle), set after the transport and the
+//!   redistancing, which leaves those nodes alone. Otherwise the periodic box's seam runs
+//!   through the walls as a second interface, liquid over gas across the wrap, held only by
+//!   the penalization: under a rising body that interface climbed out of the floor as a gas
+//!   finger and the run blew up (the `floating` case at t = 4.5).
 //! * Volume: the M'4 transport is not exactly volume-preserving for a level set, so after each
-//!   step the level set is shifted, φ_w += (V₀ - V)/A, with V = ∫H_ε(φ_w) and A = ∫δ_ε(φ_w)
-//!   (two Newton steps), which holds the liquid volume at its initial value V₀.
+//!   step the level set is shifted, φ_w += (V₀ - V)/A, with V = ∫(1 - χ_s)H_ε(φ_w) and
+//!   A = ∫(1 - χ_s)δ_ε(φ_w) over the box outside the walls (χ_s their characteristic function;
+//!   two Newton steps), which holds the liquid volume at its initial value V₀.
 //!
 //! Sums are taken row by row in a fixed order: the results do not depend on the thread count.
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::base::kernels::heaviside;
-use crate::bodies::BodyFields;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
+use crate::bodies::{Body, BodyFields, GridPatch};
 use crate::systems::transport::{LineScratch, sweep};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
@@ -43,14 +51,26 @@ use rayon::prelude::*;
 /// Pseudo-time iterations of the redistancing per step.
 pub const STEP_ITERATIONS: usize = 2;
 
+/// A node inside a wall and the point (in grid units from the origin) whose φ_w it takes.
+#[derive(Debug, Clone, Copy)]
+struct WallNode {
+    node: usize,
+    from: [f64; 3],
+}
+
 /// The free surface's scratch: the sweeps' line buffers, the level set before redistancing and
-/// a second buffer for the Jacobi iterations, and per-row partial sums.
+/// a second buffer for the Jacobi iterations, per-row partial sums, and the walls (set at
+/// startup from the static bodies): the nodes inside them with the point each copies, and
+/// 1 - χ_s per node (empty without walls).
 #[derive(Resource)]
 pub struct FreeSurfaceScratch {
     pool: Vec<LineScratch>,
     phi0: Vec<f64>,
     next: Vec<f64>,
     partial: Vec<[f64; 2]>,
+    wall: Vec<WallNode>,
+    in_wall: Vec<bool>,
+    open: Vec<f32>,
 }
 
 impl FreeSurfaceScratch {
@@ -62,7 +82,119 @@ impl FreeSurfaceScratch {
             phi0: vec![0.0; grid.len()],
             next: vec![0.0; grid.len()],
             partial: vec![[0.0; 2]; grid.len() / grid.n[0]],
+            wall: Vec::new(),
+            in_wall: Vec::new(),
+            open: Vec::new(),
         }
+    }
+
+    /// The walls from the static bodies' union level set `phi_s` (> 0 inside, `None` without
+    /// static bodies) and smoothed half-width `eps`.
+    fn set_walls(&mut self, grid: &Grid, phi_s: Option<&[f64]>, eps: f64) {
+        self.wall.clear();
+        self.in_wall.clear();
+        self.open.clear();
+        let Some(phi_s) = phi_s else {
+            return;
+        };
+        let [nx, ny, nz] = grid.n;
+        let h = grid.h;
+        self.open = phi_s
+            .iter()
+            .map(|&p| (1.0 - heaviside(p, eps)) as f32)
+            .collect();
+        self.in_wall = phi_s.iter().map(|&p| p > 0.0).collect();
+        let wrap = |i: usize, d: isize, n: usize| (i as isize + d).rem_euclid(n as isize) as usize;
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let c = grid.idx(i, j, k);
+                    let p = phi_s[c];
+                    if p <= 0.0 {
+                        continue;
+                    }
+                    // The outward normal -∇φ_s by centred differences (a neighbour beyond
+                    // every static patch counts as one cell further out).
+                    let mut g = [0.0; 3];
+                    let mut down = [0.0; 3];
+                    for a in 0..grid.dim {
+                        let (m, q) = match a {
+                            0 => (
+                                grid.idx(wrap(i, -1, nx), j, k),
+                                grid.idx(wrap(i, 1, nx), j, k),
+                            ),
+                            1 => (
+                                grid.idx(i, wrap(j, -1, ny), k),
+                                grid.idx(i, wrap(j, 1, ny), k),
+                            ),
+                            _ => (
+                                grid.idx(i, j, wrap(k, -1, nz)),
+                                grid.idx(i, j, wrap(k, 1, nz)),
+                            ),
+                        };
+                        let (pm, pq) = (phi_s[m].max(p - h), phi_s[q].max(p - h));
+                        g[a] = -(pq - pm) / (2.0 * h);
+                        // The steeper one-sided descent, for a ridge (the middle of a wall
+                        // across the periodic seam, where the centred difference vanishes).
+                        down[a] = if pq <= pm {
+                            (p - pq) / h
+                        } else {
+                            -(p - pm) / h
+                        };
+                    }
+                    let mut norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+                    if norm < 0.5 {
+                        g = down;
+                        norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+                    }
+                    // No direction out of the wall here: the node keeps the flow's φ_w.
+                    if norm < 0.5 {
+                        continue;
+                    }
+                    let reach = (p + h) / (h * norm);
+                    let from = [
+                        i as f64 + g[0] * reach,
+                        j as f64 + g[1] * reach,
+                        k as f64 + g[2] * reach,
+                    ];
+                    self.wall.push(WallNode { node: c, from });
+                }
+            }
+        }
+    }
+}
+
+/// φ at the point `x` in grid units from the origin (multilinear, periodic).
+fn interpolate(grid: &Grid, phi: &[f64], x: [f64; 3]) -> f64 {
+    let mut idx = [[0usize; 2]; 3];
+    let mut w = [[1.0, 0.0]; 3];
+    for a in 0..grid.dim {
+        let f = x[a].floor();
+        let t = x[a] - f;
+        let n = grid.n[a] as isize;
+        let i0 = (f as isize).rem_euclid(n) as usize;
+        idx[a] = [i0, (i0 + 1) % grid.n[a]];
+        w[a] = [1.0 - t, t];
+    }
+    let mut v = 0.0;
+    for c in 0..2 {
+        for b in 0..2 {
+            for a in 0..2 {
+                let wt = w[0][a] * w[1][b] * w[2][c];
+                if wt != 0.0 {
+                    v += wt * phi[grid.idx(idx[0][a], idx[1][b], idx[2][c])];
+                }
+            }
+        }
+    }
+    v
+}
+
+/// φ_w inside the walls: the value at each wall node's point outside (serial: a few layers of
+/// nodes; the points lie outside the walls, so the order does not matter).
+fn extend_into_walls(grid: &Grid, phi: &mut [f64], wall: &[WallNode]) {
+    for w in wall {
+        phi[w.node] = interpolate(grid, phi, w.from);
     }
 }
 
@@ -126,6 +258,7 @@ pub fn free_surface(
             &mut scratch.pool,
         );
     }
+    extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
     redistance(&grid, ls, scratch, STEP_ITERATIONS);
     let eps = params.interface_cells * grid.h;
     restore_volume(&grid, ls, scratch, eps);
@@ -147,6 +280,7 @@ pub fn redistance(
     let band = ls.band;
     scratch.phi0.copy_from_slice(&ls.phi);
     let phi0 = &scratch.phi0;
+    let in_wall = &scratch.in_wall;
     let nb = |i: usize, n: usize| -> (usize, usize) {
         (
             if i == 0 { n - 1 } else { i - 1 },
@@ -177,11 +311,16 @@ pub fn redistance(
                     let near = nbs[..dim]
                         .iter()
                         .any(|&(m, p)| s0 * phi0[m] < 0.0 || s0 * phi0[p] < 0.0);
+                    let v = phi[c];
+                    // Wall nodes hold the fluid's φ_w continued (`extend_into_walls`).
+                    if in_wall.get(c).copied().unwrap_or(false) {
+                        *o = v;
+                        continue;
+                    }
                     if s0 == 0.0 {
                         *o = 0.0;
                         continue;
                     }
-                    let v = phi[c];
                     if near {
                         let mut g2 = 0.0;
                         for &(m, p) in &nbs[..dim] {
@@ -214,17 +353,27 @@ pub fn redistance(
     }
 }
 
-/// ∫H_ε(φ) dV and ∫δ_ε(φ) dV, summed row by row in a fixed order.
-pub fn volume_and_area(grid: &Grid, phi: &[f64], partial: &mut [[f64; 2]], eps: f64) -> (f64, f64) {
+/// ∫(1 - χ_s)H_ε(φ) dV and ∫(1 - χ_s)δ_ε(φ) dV outside the walls (`open` = 1 - χ_s per
+/// node, empty for none), summed row by row in a fixed order.
+pub fn volume_and_area(
+    grid: &Grid,
+    phi: &[f64],
+    open: &[f32],
+    partial: &mut [[f64; 2]],
+    eps: f64,
+) -> (f64, f64) {
     let nx = grid.n[0];
     partial
         .par_iter_mut()
         .zip(phi.par_chunks(nx))
-        .for_each(|(s, row)| {
+        .enumerate()
+        .for_each(|(r, (s, row))| {
             let (mut v, mut a) = (0.0, 0.0);
-            for &p in row {
-                v += heaviside(p, eps);
-                a += delta(p, eps);
+            let open = open.get(r * nx..(r + 1) * nx);
+            for (i, &p) in row.iter().enumerate() {
+                let w = open.map_or(1.0, |o| o[i] as f64);
+                v += w * heaviside(p, eps);
+                a += w * delta(p, eps);
             }
             *s = [v, a];
         });
@@ -254,7 +403,7 @@ pub fn restore_volume(
     eps: f64,
 ) {
     for _ in 0..2 {
-        let (v, a) = volume_and_area(grid, &ls.phi, &mut scratch.partial, eps);
+        let (v, a) = volume_and_area(grid, &ls.phi, &scratch.open, &mut scratch.partial, eps);
         ls.volume = v;
         ls.area = a;
         if a <= 0.0 {
@@ -267,7 +416,7 @@ pub fn restore_volume(
                 .for_each(|p| *p = (*p + shift).clamp(-band, band))
         });
     }
-    let (v, a) = volume_and_area(grid, &ls.phi, &mut scratch.partial, eps);
+    let (v, a) = volume_and_area(grid, &ls.phi, &scratch.open, &mut scratch.partial, eps);
     ls.volume = v;
     ls.area = a;
 }
@@ -281,15 +430,38 @@ pub fn free_surface_init(
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
     mut bf: ResMut<BodyFields>,
+    bodies: Query<(&Body, &GridPatch)>,
 ) {
     let ls = &mut *ls;
     let eps = params.interface_cells * grid.h;
+    // The walls: the static bodies' union level set (sampled by `level_sets_init`).
+    let mut phi_s: Option<Vec<f64>> = None;
+    for (body, patch) in &bodies {
+        if !body.is_static() || patch.is_empty() {
+            continue;
+        }
+        let phi_s = phi_s.get_or_insert_with(|| vec![f64::NEG_INFINITY; grid.len()]);
+        let [dx, dy, dz] = patch.dims;
+        for c in 0..dz {
+            for b in 0..dy {
+                for a in 0..dx {
+                    let g = patch.grid_index(&grid, a, b, c);
+                    let v = patch.phi[a + dx * (b + dy * c)];
+                    phi_s[g] = phi_s[g].max(v);
+                }
+            }
+        }
+    }
+    scratch.set_walls(&grid, phi_s.as_deref(), eps);
+    extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
     // A restart holds a redistanced level set and its target: leave both.
     if ls.target_volume == 0.0 {
         let dtau = if grid.dim == 2 { 0.5 } else { 1.0 / 3.0 };
         let its = (3.0 * ls.band / grid.h / dtau).ceil() as usize;
         redistance(&grid, ls, &mut scratch, its);
-        let (v, a) = volume_and_area(&grid, &ls.phi, &mut scratch.partial, eps);
+        extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
+        let scratch = &mut *scratch;
+        let (v, a) = volume_and_area(&grid, &ls.phi, &scratch.open, &mut scratch.partial, eps);
         ls.target_volume = v;
         ls.volume = v;
         ls.area = a;

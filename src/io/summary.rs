@@ -214,6 +214,29 @@ pub fn describe(scene: &ValidScene) -> String {
             vector(&scene.gravity()[..g.dim])
         );
     }
+    if let Some(fs) = &scene.free_surface {
+        let regions: Vec<String> = fs
+            .liquid
+            .iter()
+            .map(|r| match r {
+                crate::scene::format::LiquidRegion::Below { height, .. } => {
+                    format!("a pool below {}", sig4(*height))
+                }
+                crate::scene::format::LiquidRegion::Above { height, .. } => {
+                    format!("a layer above {}", sig4(*height))
+                }
+                crate::scene::format::LiquidRegion::Shape { .. } => "a shape".to_string(),
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "  free surface: liquid of density {} (the fluid's), gas of density {} (ratio 1:{}), liquid at t = 0: {}; an adaptive time step is also at most c (h/|g|)^(1/2)",
+            f.density,
+            fs.gas_density,
+            sig4(f.density / fs.gas_density),
+            regions.join(", ")
+        );
+    }
     let _ = writeln!(
         s,
         "  time step: {}; end time {}",
