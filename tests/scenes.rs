@@ -362,3 +362,33 @@ fn leftover_numerics_live_under_experimental() {
     assert_eq!(d.numerics.experimental.remesh_kernel, RemeshKernel::M4Prime);
     assert!(!d.to_ron().contains("experimental"), "{}", d.to_ron());
 }
+
+#[test]
+fn free_surface_ratio_beyond_the_tested_one_warns_with_its_line() {
+    let text = |gas: &str| {
+        format!(
+            r#"Scene(
+    name: "pool",
+    domain: (origin: [0.0, -0.125], extent: [1.0, 1.25], h: 0.0625),
+    fluid: (density: 1.0, viscosity: 0.001, gravity: [0.0, -1.0]),
+    free_surface: Some((
+        gas_density: {gas},
+        liquid: [Below(height: 0.5)],
+    )),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.0), kind: Static, position: [0.0, 0.0]),
+        (name: "lid", shape: HalfSpace(normal: [0.0, -1.0, 0.0], offset: -1.0), kind: Static, position: [0.0, 0.0]),
+    ],
+)"#
+        )
+    };
+    let ok = tumble::scene::Scene::parse(&text("0.01"), "pool.ron", "pool").unwrap();
+    assert!(ok.warnings().iter().all(|w| !w.contains("gas_density")));
+    let far = tumble::scene::Scene::parse(&text("0.001"), "pool.ron", "pool").unwrap();
+    let w = far.warnings();
+    assert!(
+        w.iter()
+            .any(|w| w.contains("pool.ron, line 6") && w.contains("1:1000")),
+        "{w:?}"
+    );
+}
