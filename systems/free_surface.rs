@@ -32,17 +32,19 @@
 //!   through the walls as a second interface, liquid over gas across the wrap, held only by
 //!   the penalization: under a rising body that interface climbed out of the floor as a gas
 //!   finger and the run blew up (the `floating` case at t = 4.5).
-//! * Moving bodies: a body carries inside it, rigidly, the φ_w it had where it entered, so
-//!   that a body dropped from the gas into the liquid held gas inside it. The phases' density
-//!   inside a moving body is instead that of the fluid it displaces: ρ_P = ρ_gas + (ρ_liquid -
-//!   ρ_gas) H_ε(φ_e) with φ_e the fluid's φ_w continued linearly along the body's outward
-//!   normal n from the point x_s = x + (φ_b + h) n just outside it,
+//! * Moving bodies: inside a moving body φ_w is likewise the fluid's, continued linearly along
+//!   the body's outward normal n from the point x_s = x + (φ_b + h) n just outside it,
 //!   φ_e(x) = φ_w(x_s) - (φ_b + h) (φ_w(x_s + h n) - φ_w(x_s)) / h,
-//!   exact for a flat surface cut by the body. This sets its buoyancy (through ρ - ρ_P): with
-//!   the carried φ_w, bodies of density 0.8 dropped into water sank (`scenes/tank.ron`), and
-//!   in the `floating` case the box of density 0.25 drew 0.0142 against Archimedes' 0.0242
-//!   (0.0199 with φ_e), the one of 0.5 0.0440 against 0.0495 (0.0474). φ_w itself is left as
-//!   carried: written into φ_w, the extension made the `floating` case blow up at t = 7.
+//!   exact for a flat surface cut by the body: written into φ_w after the transport (then
+//!   redistanced with the rest), and used again for the phases' density inside the body at
+//!   the start of the next step, at its new pose. A body then displaces the fluid around it,
+//!   which sets its buoyancy (through ρ - ρ_P). Carried rigidly instead, φ_w kept inside a
+//!   body the phase of wherever it had entered: a body dropped from the gas into the liquid
+//!   held gas, shed gas pockets along its path and displaced nothing (in `scenes/tank.ron`
+//!   bodies of density 0.8 sank), and in the `floating` case the box of density 0.25 drew
+//!   0.0142 against Archimedes' 0.0242 (0.0240 now), the one of 0.5 0.0440 against 0.0495
+//!   (0.0485). (Masking these nodes out of the redistancing, or counting the liquid volume
+//!   outside the moving bodies, made the `floating` case blow up at t = 7.)
 //! * Volume: the M'4 transport is not exactly volume-preserving for a level set, so after each
 //!   step the level set is shifted, φ_w += (V₀ - V)/A, with V = ∫(1 - χ_s)H_ε(φ_w) and
 //!   A = ∫(1 - χ_s)δ_ε(φ_w) over the box outside the walls (χ_s their characteristic function;
@@ -306,8 +308,8 @@ pub fn phase_density(
     };
     let eps = params.interface_cells * grid.h;
     write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
-    // Inside a moving body, the phase it displaces: φ_w continued from outside, not the φ_w
-    // the body carries rigidly inside it (see the module doc).
+    // Inside a moving body, the phase it displaces at its pose now: φ_w continued from outside
+    // (see the module doc).
     let (g, d) = (fs.gas_density, fs.liquid_density - fs.gas_density);
     let scratch = &mut *scratch;
     for (body, patch) in &bodies {
@@ -352,6 +354,7 @@ pub fn free_surface(
     fields: Res<Fields>,
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
+    bodies: Query<(&Body, &GridPatch)>,
 ) {
     let ls = &mut *ls;
     let scratch = &mut *scratch;
@@ -377,6 +380,26 @@ pub fn free_surface(
         );
     }
     extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
+    // Inside the moving bodies: the fluid's φ_w continued (see the module doc).
+    for (body, patch) in &bodies {
+        if body.is_static() || patch.is_empty() {
+            continue;
+        }
+        extension_values(&grid, patch, &ls.phi, &mut scratch.next, ls.band);
+        let [dx, dy, _] = patch.dims;
+        let next = &scratch.next;
+        let phi = crate::base::grid::SyncPtr(ls.phi.as_mut_ptr());
+        (0..patch.len() / dx).into_par_iter().for_each(|r| {
+            let (b, c) = (r % dy, r / dy);
+            for a in 0..dx {
+                if patch.phi[r * dx + a] > 0.0 {
+                    let n = patch.grid_index(&grid, a, b, c);
+                    // SAFETY: distinct patch rows map to distinct grid nodes.
+                    unsafe { phi.write(n, next[n]) };
+                }
+            }
+        });
+    }
     redistance(&grid, ls, scratch, STEP_ITERATIONS);
     let eps = params.interface_cells * grid.h;
     restore_volume(&grid, ls, scratch, eps);

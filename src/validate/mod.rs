@@ -500,7 +500,7 @@ pub const CASES: &[Case] = &[
             row: "the run reaches t = 0.6 without blowing up",
             quick: true,
             full: true,
-            why: "blows up after the cup enters the water (64^3, ratio 1:100: max |vorticity| grows from 2e3 at t = 0.025 to 1e5 at t = 0.031), in the gas one or two cells outside the cup's wall at the waterline. It depends on the density ratio: at 1:10 it comes at t = 0.047, at 1:2 the run is calm at t = 0.08. Not the cause (each tried alone, each still blew up): viscosity 1e-3 (t = 0.034), half the time step (worse: max |vorticity| 6.7e3 at t = 0.019), no advection term in the pressure source (t = 0.031), phi_w extended into the moving body (t = 0.034; branch extbodies); issue 17",
+            why: "blows up after the cup enters the water (64^3, ratio 1:100: max |vorticity| grows from 2e3 at t = 0.025 to 1e5 at t = 0.031), in the gas one or two cells outside the cup's wall at the waterline. It depends on the density ratio: at 1:10 it comes at t = 0.047, at 1:2 the run is calm at t = 0.08. Not the cause (each tried alone, each still blew up): viscosity 1e-3 (t = 0.034), half the time step (worse: max |vorticity| 6.7e3 at t = 0.019), no advection term in the pressure source (t = 0.031), phi_w extended into the moving body (now the default: t = 0.032); issue 17",
         }],
     },
 ];
