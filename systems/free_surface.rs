@@ -40,7 +40,7 @@
 //!   the start of the next step, at its new pose. A body then displaces the fluid around it,
 //!   which sets its buoyancy (through ρ - ρ_P). Carried rigidly instead, φ_w kept inside a
 //!   body the phase of wherever it had entered: a body dropped from the gas into the liquid
-//!   held gas, shed gas pockets along its path and displaced nothing (in `scenes/tank.ron`
+//!   held gas and displaced nothing (in `scenes/tank.ron`
 //!   bodies of density 0.8 sank), and in the `floating` case the box of density 0.25 drew
 //!   0.0142 against Archimedes' 0.0242 (0.0240 now), the one of 0.5 0.0440 against 0.0495
 //!   (0.0485). (Masking these nodes out of the redistancing, or counting the liquid volume
