@@ -285,6 +285,30 @@ fn extension_values(grid: &Grid, patch: &GridPatch, phi: &[f64], next: &mut [f64
     });
 }
 
+/// `out[n] = value(n)` at every grid node `n` inside a body (its patch's φ > 0).
+fn write_inside(
+    grid: &Grid,
+    patch: &GridPatch,
+    out: &mut [f64],
+    value: impl Fn(usize) -> f64 + Sync,
+) {
+    let [dx, dy, _] = patch.dims;
+    if patch.is_empty() {
+        return;
+    }
+    let out = crate::base::grid::SyncPtr(out.as_mut_ptr());
+    (0..patch.len() / dx).into_par_iter().for_each(|r| {
+        let (b, c) = (r % dy, r / dy);
+        for a in 0..dx {
+            if patch.phi[r * dx + a] > 0.0 {
+                let n = patch.grid_index(grid, a, b, c);
+                // SAFETY: distinct patch rows map to distinct grid nodes.
+                unsafe { out.write(n, value(n)) };
+            }
+        }
+    });
+}
+
 /// φ_w inside the walls: the value at each wall node's point outside (serial: a few layers of
 /// nodes; the points lie outside the walls, so the order does not matter).
 fn extend_into_walls(grid: &Grid, phi: &mut [f64], wall: &[WallNode]) {
@@ -317,18 +341,9 @@ pub fn phase_density(
             continue;
         }
         extension_values(&grid, patch, &ls.phi, &mut scratch.next, ls.band);
-        let [dx, dy, _] = patch.dims;
         let next = &scratch.next;
-        let rho = crate::base::grid::SyncPtr(bf.rho_phase.as_mut_ptr());
-        (0..patch.len() / dx).into_par_iter().for_each(|r| {
-            let (b, c) = (r % dy, r / dy);
-            for a in 0..dx {
-                if patch.phi[r * dx + a] > 0.0 {
-                    let n = patch.grid_index(&grid, a, b, c);
-                    // SAFETY: distinct patch rows map to distinct grid nodes.
-                    unsafe { rho.write(n, g + d * heaviside(next[n], eps)) };
-                }
-            }
+        write_inside(&grid, patch, &mut bf.rho_phase, |n| {
+            g + d * heaviside(next[n], eps)
         });
     }
 }
@@ -386,19 +401,8 @@ pub fn free_surface(
             continue;
         }
         extension_values(&grid, patch, &ls.phi, &mut scratch.next, ls.band);
-        let [dx, dy, _] = patch.dims;
         let next = &scratch.next;
-        let phi = crate::base::grid::SyncPtr(ls.phi.as_mut_ptr());
-        (0..patch.len() / dx).into_par_iter().for_each(|r| {
-            let (b, c) = (r % dy, r / dy);
-            for a in 0..dx {
-                if patch.phi[r * dx + a] > 0.0 {
-                    let n = patch.grid_index(&grid, a, b, c);
-                    // SAFETY: distinct patch rows map to distinct grid nodes.
-                    unsafe { phi.write(n, next[n]) };
-                }
-            }
-        });
+        write_inside(&grid, patch, &mut ls.phi, |n| next[n]);
     }
     redistance(&grid, ls, scratch, STEP_ITERATIONS);
     let eps = params.interface_cells * grid.h;
