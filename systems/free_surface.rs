@@ -87,6 +87,11 @@ pub struct FreeSurfaceScratch {
 }
 
 impl FreeSurfaceScratch {
+    /// Per node, whether it lies inside a static wall (empty without walls).
+    pub fn in_wall(&self) -> &[bool] {
+        &self.in_wall
+    }
+
     /// Scratch for `grid`.
     pub fn new(grid: &Grid) -> Self {
         let nmax = *grid.n.iter().max().unwrap_or(&1);

@@ -458,3 +458,72 @@ fn an_hdf5_snapshot_holds_the_free_surface() {
     assert!(names.contains("free_surface"), "{names}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// In a closed tank the free surface's part ends at the walls: inside them φ_w is the fluid's
+/// continued (so the surface runs on through the side walls), and the periodic box's seam
+/// makes a second zero level in the floor and lid; neither is written.
+#[test]
+fn the_free_surface_part_stops_at_the_tank_walls() {
+    let n = 32.0;
+    let h = 1.0 / n;
+    // Walls 0.06 thick across the seam (two cells on either side of it).
+    let scene = Scene::parse(
+        r#"Scene(
+    name: "tank-out",
+    domain: (extent: [1.0, 1.0, 1.0], cells: [32, 32, 32]),
+    fluid: (density: 1.0, viscosity: 0.01, gravity: [0.0, 0.0, -1.0]),
+    free_surface: Some((gas_density: 0.1, liquid: [Below(height: 0.41)])),
+    numerics: (end_time: 0.01),
+    bodies: [
+        (name: "tank", shape: Complement(Box(half_extents: [0.44, 0.44, 0.44])), kind: Static, position: [0.5, 0.5, 0.5]),
+    ],
+    output: (fields: [Density]),
+)"#,
+        "tank.ron",
+        "tank-out",
+    )
+    .unwrap();
+    let sim = Simulation::new(scene).unwrap();
+    // Without clipping the level reaches into the walls: the seam in the floor and lid.
+    let ls = sim.world.resource::<LiquidLevelSet>();
+    let raw = zero_level(sim.grid(), &ls.phi);
+    let (lo, hi) = (0.06 - h, 0.94 + h);
+    let outside = |p: &glam::DVec3| p.to_array().iter().any(|&x| x < lo || x > hi);
+    assert!(
+        raw.points.iter().any(|p| p.z < lo || p.z > hi),
+        "the test needs a seam level in the walls"
+    );
+    assert!(raw.points.iter().any(outside));
+    let dir = temp("tank");
+    let mut snaps = Snapshots::new(&dir, &sim);
+    snaps.write(&sim).unwrap();
+    // Every point of the surfaces file (the tank's inner faces and the free surface) lies
+    // within a cell of the tank's inner box, and the free surface at z = 0.41 is there.
+    let vtp = std::fs::read_to_string(dir.join("bodies_000000.vtp")).unwrap();
+    let start = vtp.find("<Points>").unwrap();
+    let body = &vtp[start..];
+    let open = body.find('>').unwrap() + 1;
+    let data = &body[open..];
+    let data = &data[data.find('>').unwrap() + 1..data.find("</DataArray>").unwrap()];
+    let v: Vec<f64> = data
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let points: Vec<glam::DVec3> = v
+        .chunks_exact(3)
+        .map(|c| glam::DVec3::new(c[0], c[1], c[2]))
+        .collect();
+    let bad: Vec<_> = points.iter().filter(|p| outside(p)).collect();
+    assert!(
+        bad.is_empty(),
+        "{} points outside the tank: {:?}",
+        bad.len(),
+        &bad[..bad.len().min(5)]
+    );
+    let at_level = points
+        .iter()
+        .filter(|p| (p.z - 0.41).abs() < 0.1 * h)
+        .count();
+    assert!(at_level > 500, "{at_level} points on the free surface");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -55,6 +55,60 @@ pub fn zero_level(grid: &Grid, phi: &[f64]) -> SurfaceMesh {
     }
 }
 
+/// Drop the triangles (3D) or segments (2D) of `mesh`, a zero level from [`zero_level`] on
+/// `grid`, whose centroid's nearest node is `hidden`: the free surface's level inside static
+/// walls, where φ_w is the fluid's continued and the periodic box's seam makes a second zero
+/// level that is not a surface of the flow. Only the points still used are kept.
+pub fn clip(grid: &Grid, mesh: &mut SurfaceMesh, hidden: impl Fn(usize) -> bool) {
+    let node = |p: DVec3| {
+        let at = |a: usize, x: f64| {
+            let n = grid.n[a] as i64;
+            (((x - grid.origin[a]) / grid.h).round() as i64).rem_euclid(n) as usize
+        };
+        let k = if grid.dim == 3 { at(2, p.z) } else { 0 };
+        grid.idx(at(0, p.x), at(1, p.y), k)
+    };
+    let points = &mesh.points;
+    let centroid =
+        |ids: &[u32]| ids.iter().map(|&i| points[i as usize]).sum::<DVec3>() / ids.len() as f64;
+    let triangles = std::mem::take(&mut mesh.triangles);
+    mesh.triangles = triangles
+        .into_iter()
+        .filter(|t| !hidden(node(centroid(t))))
+        .collect();
+    let lines = std::mem::take(&mut mesh.lines);
+    mesh.lines = lines
+        .into_iter()
+        .filter(|l| !hidden(node(centroid(l))))
+        .collect();
+    // Keep only the points still used, in their order.
+    let mut new_id = vec![u32::MAX; mesh.points.len()];
+    let used = mesh
+        .triangles
+        .iter()
+        .flatten()
+        .chain(mesh.lines.iter().flatten());
+    for &i in used {
+        new_id[i as usize] = 0;
+    }
+    let mut kept = Vec::new();
+    for (i, id) in new_id.iter_mut().enumerate() {
+        if *id == 0 {
+            *id = kept.len() as u32;
+            kept.push(mesh.points[i]);
+        }
+    }
+    mesh.points = kept;
+    for i in mesh
+        .triangles
+        .iter_mut()
+        .flatten()
+        .chain(mesh.lines.iter_mut().flatten())
+    {
+        *i = new_id[*i as usize];
+    }
+}
+
 /// Surface nets on the node lattice `0..=n+1` per axis (node `n + a` is node `a`'s periodic
 /// image), cells `0..=n`: with the crate's rule (no quad on a chunk's last plane) every
 /// periodic grid edge makes its quad once.

@@ -12,7 +12,8 @@
 //! With a free surface (the world holds a [`LiquidLevelSet`]), every snapshot's fields also
 //! hold `free_surface` (φ_w), the surfaces series also holds its zero level as a part named
 //! `free_surface` (world coordinates, identity pose, zero vectors; see
-//! [`crate::io::isosurface`]), and, as in a run with a dynamic body, every snapshot also
+//! [`crate::io::isosurface`]; cut off inside static walls, where φ_w is the fluid's continued
+//! and the periodic box's seam makes a second level), and, as in a run with a dynamic body, every snapshot also
 //! writes a slice image `slices/slice_NNNNNN.png` ([`crate::io::slices`]).
 //!
 //! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
@@ -320,9 +321,19 @@ fn write_surfaces(
             vectors: vec![st.velocity, st.angular_velocity, h.force],
         })
         .collect();
-    let free = world
-        .get_resource::<LiquidLevelSet>()
-        .map(|l| crate::io::isosurface::zero_level(sim.grid(), &l.phi));
+    // The zero level, without its part inside the static walls (the seam of the periodic
+    // box runs there).
+    let free = world.get_resource::<LiquidLevelSet>().map(|l| {
+        let mut mesh = crate::io::isosurface::zero_level(sim.grid(), &l.phi);
+        let walls = world.get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
+        if let Some(w) = walls
+            .map(|w| w.in_wall())
+            .filter(|w| w.len() == l.phi.len())
+        {
+            crate::io::isosurface::clip(sim.grid(), &mut mesh, |c| w[c]);
+        }
+        mesh
+    });
     if let Some(mesh) = &free {
         parts.push(SurfacePart {
             name: FREE_SURFACE_PART,
