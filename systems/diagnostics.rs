@@ -10,7 +10,9 @@
 //! [`crate::base::params::TimeStep`]). It records kinetic energy ½⟨|u|²⟩, enstrophy
 //! ½⟨|ω|²⟩ (both per unit volume), circulation and max|ω|, and stops the run with a message
 //! naming the quantity, the place and the step when a value is not finite, max|ω| grows beyond
-//! `blowup_factor` times its initial value, or a fixed step is far beyond the CFL limit.
+//! `blowup_factor` times its initial value, max|u| of a flow that starts at rest under gravity
+//! grows beyond √`blowup_factor` times the free-fall speed across the box, or a fixed step is
+//! far beyond the CFL limit.
 //!
 //! Sums are taken per grid row and then added in row order, so they do not depend on the
 //! number of threads. Fields that no system changed since the last step (a vacuum run's) are
@@ -251,6 +253,22 @@ pub fn diagnostics_init(
     time.dt = next_dt(&params, &s, grid.h, diag.dt_fallback, time.t, time.stop_at);
 }
 
+/// For a flow that starts at rest (`omega0` = 0) under gravity: √blowup_factor times the speed
+/// of a free fall across the box's longest side, √(2 |g| L). Energy bounds a gravity-driven
+/// flow's speed by about √(2 |g| L ρ_max/ρ_min) (ten times the free fall at a density ratio of
+/// 1:100), so this only fires on a blow-up, which the relative max|ω| guard cannot see when
+/// the initial vorticity is zero.
+fn rest_speed_limit(grid: &Grid, params: &Params, omega0: f64) -> Option<f64> {
+    let g = params.gravity.iter().map(|g| g * g).sum::<f64>().sqrt();
+    let l = grid
+        .extent()
+        .iter()
+        .take(grid.dim)
+        .fold(0.0f64, |a, &b| a.max(b));
+    (omega0 == 0.0 && g > 0.0 && l > 0.0)
+        .then(|| params.blowup_factor.sqrt() * (2.0 * g * l).sqrt())
+}
+
 /// The diagnostics system: closes the step.
 pub fn diagnostics(
     grid: Res<Grid>,
@@ -275,6 +293,13 @@ pub fn diagnostics(
             "blow-up: the velocity or vorticity is not finite at {} after step {step} (t = {:.6})",
             place(&grid, i),
             time.t
+        ));
+    } else if let Some(limit) = rest_speed_limit(&grid, &params, diag.omega0)
+        && s.max_u > limit
+    {
+        diag.failure = Some(format!(
+            "blow-up: max|u| = {:.4e} after step {step} (t = {:.6}) exceeds {limit:.4e}, √blowup_factor times the speed of a free fall across the box (a flow that starts at rest and is driven by gravity cannot get there); reduce the time step (numerics.dt) or refine the grid",
+            s.max_u, time.t
         ));
     } else if diag.omega0 > 0.0 && s.max_omega > params.blowup_factor * diag.omega0 {
         diag.failure = Some(format!(

@@ -261,7 +261,9 @@ pub struct Numerics {
     /// vorticity in place. Default: 1e-8.
     pub remesh_cutoff: f64,
     /// Stop the run as blown up when max|ω| exceeds this multiple of its initial value
-    /// (dimensionless). Default: 1e4.
+    /// (dimensionless); for a flow that starts at rest under gravity (no initial vorticity),
+    /// when max|u| exceeds its square root times the free-fall speed across the box,
+    /// √(2 |g| L) with L the box's longest side. Default: 1e4.
     pub blowup_factor: f64,
     /// Penalization coefficient λ, 1/time, > 0 (implicit, so any value is stable). Default: 1e6.
     pub lambda: f64,
