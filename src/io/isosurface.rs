@@ -61,12 +61,12 @@ pub fn zero_level(grid: &Grid, phi: &[f64]) -> SurfaceMesh {
 /// level that is not a surface of the flow. Only the points still used are kept.
 pub fn clip(grid: &Grid, mesh: &mut SurfaceMesh, hidden: impl Fn(usize) -> bool) {
     let node = |p: DVec3| {
-        let at = |a: usize, x: f64| {
-            let n = grid.n[a] as i64;
-            (((x - grid.origin[a]) / grid.h).round() as i64).rem_euclid(n) as usize
+        let k = if grid.dim == 3 {
+            grid.nearest(2, p.z)
+        } else {
+            0
         };
-        let k = if grid.dim == 3 { at(2, p.z) } else { 0 };
-        grid.idx(at(0, p.x), at(1, p.y), k)
+        grid.idx(grid.nearest(0, p.x), grid.nearest(1, p.y), k)
     };
     let points = &mesh.points;
     let centroid =

@@ -334,10 +334,7 @@ pub fn write_slice(dir: &Path, index: usize, sim: &Simulation) -> Result<String>
             .map(|(_, st)| st.center.y)
     });
     let j = match centre {
-        Some(y) if y.is_finite() => {
-            let r = ((y - g.origin[1]) / g.h).round();
-            (r.rem_euclid(g.n[1] as f64) as usize).min(g.n[1] - 1)
-        }
+        Some(y) if y.is_finite() => g.nearest(1, y),
         _ => g.n[1] / 2,
     };
     let name = &sim.scene().name;
