@@ -30,8 +30,8 @@
 //! where it is (circulation is kept; the error is of the size of the cutoff).
 
 use crate::base::fields::{Fields, Params, SimTime};
-use crate::base::grid::{Grid, component_ptrs};
-use crate::base::kernels::{lambda42_weights, m4prime_weights, split};
+use crate::base::grid::{Grid, SyncPtr, component_ptrs};
+use crate::base::kernels::{lambda42_weights, m4prime_weights};
 use crate::base::params::RemeshKernel;
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
@@ -49,27 +49,6 @@ pub struct TransportScratch {
     u_mid: Vec<Vec<f64>>,
     /// Whether the next step sweeps axes in reverse order.
     reverse: bool,
-}
-
-/// Per-chunk scratch of a sweep: a group of lines of vorticity in and out, and the velocity.
-pub struct LineScratch {
-    nmax: usize,
-    w_in: Vec<Vec<f64>>,
-    w_out: [Vec<f64>; 3],
-    u: Vec<f64>,
-}
-
-impl LineScratch {
-    /// Scratch for lines of up to `nmax` nodes and `nc` vorticity components.
-    pub fn new(nmax: usize, nc: usize) -> Self {
-        let len = LANES * nmax;
-        LineScratch {
-            nmax,
-            w_in: vec![vec![0.0; len]; nc],
-            w_out: std::array::from_fn(|c| if c < nc { vec![0.0; len] } else { Vec::new() }),
-            u: vec![0.0; len],
-        }
-    }
 }
 
 impl TransportScratch {
@@ -171,22 +150,11 @@ pub fn max_norm(omega: &[Vec<f64>]) -> f64 {
 fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
-    let c1 = 8.0 / (12.0 * grid.h);
-    let c2 = 1.0 / (12.0 * grid.h);
+    let c = [8.0 / (12.0 * grid.h), 1.0 / (12.0 * grid.h)];
     let (o0, rest) = omega.split_at_mut(1);
     let (o1, o2) = rest.split_at_mut(1);
-    // Periodic neighbour (|d| ≤ 2 ≤ n, so one correction suffices).
-    let wrap = |i: usize, d: isize, n: usize| -> usize {
-        let j = i as isize + d;
-        let n = n as isize;
-        (if j < 0 {
-            j + n
-        } else if j >= n {
-            j - n
-        } else {
-            j
-        }) as usize
-    };
+    #[cfg(target_arch = "x86_64")]
+    let avx2 = std::arch::is_x86_feature_detected!("avx2");
     o0[0]
         .par_chunks_mut(plane)
         .zip(o1[0].par_chunks_mut(plane))
@@ -200,50 +168,101 @@ fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
                 let ry = [-2, -1, 1, 2].map(|d| row(wrap(j, d, ny), k));
                 let rz = [-2, -1, 1, 2].map(|d| row(j, wrap(k, d, nz)));
                 let gu = [0, 1, 2].map(|a| rows(&u[a], r, ry, rz, nx));
-                let (w0, w1, w2) = (
+                let w = [
                     &mut w0[nx * j..nx * (j + 1)],
                     &mut w1[nx * j..nx * (j + 1)],
                     &mut w2[nx * j..nx * (j + 1)],
-                );
-                for i in 0..nx {
-                    let (im2, im1, ip1, ip2) = if i >= 2 && i + 2 < nx {
-                        (i - 2, i - 1, i + 1, i + 2)
-                    } else {
-                        (
-                            wrap(i, -2, nx),
-                            wrap(i, -1, nx),
-                            wrap(i, 1, nx),
-                            wrap(i, 2, nx),
-                        )
-                    };
-                    let mut g = [[0.0; 3]; 3];
-                    for a in 0..3 {
-                        let (fr, fy, fz) = &gu[a];
-                        g[a][0] = c1 * (fr[ip1] - fr[im1]) - c2 * (fr[ip2] - fr[im2]);
-                        g[a][1] = c1 * (fy[2][i] - fy[1][i]) - c2 * (fy[3][i] - fy[0][i]);
-                        g[a][2] = c1 * (fz[2][i] - fz[1][i]) - c2 * (fz[3][i] - fz[0][i]);
-                    }
-                    let gw = |w: [f64; 3]| {
-                        [
-                            g[0][0] * w[0] + g[0][1] * w[1] + g[0][2] * w[2],
-                            g[1][0] * w[0] + g[1][1] * w[1] + g[1][2] * w[2],
-                            g[2][0] * w[0] + g[2][1] * w[1] + g[2][2] * w[2],
-                        ]
-                    };
-                    let w = [w0[i], w1[i], w2[i]];
-                    let s0 = gw(w);
-                    let wh = [
-                        w[0] + 0.5 * dt * s0[0],
-                        w[1] + 0.5 * dt * s0[1],
-                        w[2] + 0.5 * dt * s0[2],
-                    ];
-                    let s = gw(wh);
-                    w0[i] = w[0] + dt * s[0];
-                    w1[i] = w[1] + dt * s[1];
-                    w2[i] = w[2] + dt * s[2];
+                ];
+                #[cfg(target_arch = "x86_64")]
+                if avx2 {
+                    // SAFETY: the CPU supports AVX2 (checked above); same arithmetic in the
+                    // same order as the portable build, so bit-identical results.
+                    unsafe { stretch_row_avx2(&gu, w, c, dt) };
+                    continue;
                 }
+                stretch_row(&gu, w, c, dt);
             }
         });
+}
+
+/// Periodic neighbour `i + d` on an axis of `n` nodes (|d| ≤ 2 ≤ n, so one correction
+/// suffices).
+#[inline(always)]
+fn wrap(i: usize, d: isize, n: usize) -> usize {
+    let j = i as isize + d;
+    let n = n as isize;
+    (if j < 0 {
+        j + n
+    } else if j >= n {
+        j - n
+    } else {
+        j
+    }) as usize
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn stretch_row_avx2(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; 2], dt: f64) {
+    stretch_row(gu, w, c, dt);
+}
+
+/// The stretching of one row of nodes along x: the interior in one branch-free loop, the two
+/// nodes at each end with wrapped x neighbours.
+#[inline(always)]
+fn stretch_row(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; 2], dt: f64) {
+    let nx = w[0].len();
+    let [w0, w1, w2] = w;
+    let node = |i: usize, im2: usize, im1: usize, ip1: usize, ip2: usize| {
+        let mut g = [[0.0; 3]; 3];
+        for a in 0..3 {
+            let (fr, fy, fz) = &gu[a];
+            g[a][0] = c[0] * (fr[ip1] - fr[im1]) - c[1] * (fr[ip2] - fr[im2]);
+            g[a][1] = c[0] * (fy[2][i] - fy[1][i]) - c[1] * (fy[3][i] - fy[0][i]);
+            g[a][2] = c[0] * (fz[2][i] - fz[1][i]) - c[1] * (fz[3][i] - fz[0][i]);
+        }
+        g
+    };
+    let step = |g: [[f64; 3]; 3], w: [f64; 3]| {
+        let gw = |w: [f64; 3]| {
+            [
+                g[0][0] * w[0] + g[0][1] * w[1] + g[0][2] * w[2],
+                g[1][0] * w[0] + g[1][1] * w[1] + g[1][2] * w[2],
+                g[2][0] * w[0] + g[2][1] * w[1] + g[2][2] * w[2],
+            ]
+        };
+        let s0 = gw(w);
+        let wh = [
+            w[0] + 0.5 * dt * s0[0],
+            w[1] + 0.5 * dt * s0[1],
+            w[2] + 0.5 * dt * s0[2],
+        ];
+        let s = gw(wh);
+        [w[0] + dt * s[0], w[1] + dt * s[1], w[2] + dt * s[2]]
+    };
+    let ends = [0, 1, nx.saturating_sub(2), nx.saturating_sub(1)];
+    for i in 2..nx.saturating_sub(2) {
+        let g = node(i, i - 2, i - 1, i + 1, i + 2);
+        let r = step(g, [w0[i], w1[i], w2[i]]);
+        w0[i] = r[0];
+        w1[i] = r[1];
+        w2[i] = r[2];
+    }
+    for (e, &i) in ends.iter().enumerate() {
+        if i >= nx || ends[..e].contains(&i) || (2..nx.saturating_sub(2)).contains(&i) {
+            continue;
+        }
+        let g = node(
+            i,
+            wrap(i, -2, nx),
+            wrap(i, -1, nx),
+            wrap(i, 1, nx),
+            wrap(i, 2, nx),
+        );
+        let r = step(g, [w0[i], w1[i], w2[i]]);
+        w0[i] = r[0];
+        w1[i] = r[1];
+        w2[i] = r[2];
+    }
 }
 
 /// The row at offset `r` and its y and z neighbour rows, as slices of length `nx`.
@@ -256,23 +275,36 @@ fn rows(f: &[f64], r: usize, ry: [usize; 4], rz: [usize; 4], nx: usize) -> Rows<
     )
 }
 
-/// Where the lines along `axis` start and how far apart their nodes are.
-#[inline(always)]
-fn line_layout(grid: &Grid, axis: usize, line: usize) -> (usize, usize) {
-    let [nx, ny, _] = grid.n;
-    match axis {
-        0 => (line * nx, 1),
-        1 => {
-            let (i, k) = (line % nx, line / nx);
-            (i + nx * ny * k, nx)
-        }
-        _ => (line, nx * ny),
-    }
+/// Lines pushed together: a group of `LANES` lines is stored interleaved (node p of lane l at
+/// `p * LANES + l`), so the arithmetic of a particle runs on all lanes at once in vector
+/// registers, and consecutive writes of the remesh go to different lanes instead of queuing
+/// on the same node.
+const LANES: usize = 16;
+
+/// Ghost nodes on each side of a line's velocity, so the interpolation at the mid-step position
+/// needs no wrap unless a particle moves more than `GHOST - 3` cells in half a step.
+const GHOST: usize = 8;
+
+/// Per-chunk scratch of a sweep: a group of `LANES` lines of vorticity in and out, and the
+/// velocity with `GHOST` periodic ghost nodes at both ends, all interleaved by lane.
+pub struct LineScratch {
+    nmax: usize,
+    w_in: Vec<Vec<f64>>,
+    w_out: Vec<Vec<f64>>,
+    u: Vec<f64>,
 }
 
-/// Lines gathered together in the sweeps across x (adjacent in memory, so the strided gathers
-/// read whole cache lines).
-const LANES: usize = 16;
+impl LineScratch {
+    /// Scratch for lines of up to `nmax` nodes and `nc` vorticity components.
+    pub fn new(nmax: usize, nc: usize) -> Self {
+        LineScratch {
+            nmax,
+            w_in: vec![vec![0.0; LANES * nmax]; nc],
+            w_out: vec![vec![0.0; LANES * nmax]; nc],
+            u: vec![0.0; LANES * (nmax + 2 * GHOST)],
+        }
+    }
+}
 
 #[allow(clippy::too_many_arguments)]
 /// One advection sweep along `axis`: push (RK2, kernel-interpolated velocity) and remesh
@@ -288,187 +320,305 @@ pub fn sweep(
     pool: &mut [LineScratch],
 ) {
     let n = grid.n[axis];
-    let nx = grid.n[0];
+    let [nx, ny, _] = grid.n;
     let nlines = grid.len() / n;
     let nc = omega.len();
     let ptrs = component_ptrs(omega);
-    // Groups of lines: along x each line is its own group; across x, up to LANES lines with
-    // consecutive i (and so consecutive memory) form a group.
-    let lanes = if axis == 0 { 1 } else { LANES.min(nx) };
-    let groups_per_row = if axis == 0 { 1 } else { nx.div_ceil(lanes) };
+    // Groups of lines: along x, LANES consecutive lines (rows j, k); across x, up to LANES
+    // lines with consecutive i (and so consecutive memory) in one row.
+    let groups_per_row = if axis == 0 { 1 } else { nx.div_ceil(LANES) };
     let ngroups = if axis == 0 {
-        nlines
+        nlines.div_ceil(LANES)
     } else {
         (nlines / nx) * groups_per_row
+    };
+    let stride = match axis {
+        0 => 1,
+        1 => nx,
+        _ => nx * ny,
     };
     let cdt = dt / grid.h;
     let cut2 = cutoff * cutoff;
     let per = ngroups.div_ceil(pool.len());
+    #[cfg(target_arch = "x86_64")]
+    let avx2 = std::arch::is_x86_feature_detected!("avx2");
     pool.par_iter_mut().enumerate().for_each(|(chunk, s)| {
         let lo = (chunk * per).min(ngroups);
         let hi = ((chunk + 1) * per).min(ngroups);
-        let nmax = s.nmax;
+        debug_assert!(s.nmax >= n && s.w_in.len() >= nc);
         for group in lo..hi {
-            let (first, count) = if axis == 0 {
-                (group, 1)
+            // The first node of each lane's line, and how many lanes are real lines.
+            let mut base = [0usize; LANES];
+            let count = if axis == 0 {
+                let first = group * LANES;
+                let count = LANES.min(nlines - first);
+                for (l, b) in base.iter_mut().enumerate().take(count) {
+                    *b = (first + l) * nx;
+                }
+                count
             } else {
                 let (row, ib) = (group / groups_per_row, group % groups_per_row);
-                let i0 = ib * lanes;
-                (row * nx + i0, lanes.min(nx - i0))
+                let i0 = ib * LANES;
+                let b0 = if axis == 1 {
+                    i0 + nx * ny * row
+                } else {
+                    i0 + nx * row
+                };
+                for (l, b) in base.iter_mut().enumerate() {
+                    *b = b0 + l;
+                }
+                LANES.min(nx - i0)
             };
-            let (base, stride) = line_layout(grid, axis, first);
-            for p in 0..n {
-                let idx = base + p * stride;
-                for l in 0..count {
-                    s.u[l * nmax + p] = u_axis[idx + l];
-                }
-                for c in 0..nc {
-                    for l in 0..count {
-                        // SAFETY: the lines of this group belong to this task only.
-                        s.w_in[c][l * nmax + p] = unsafe { ptrs[c].read(idx + l) };
-                    }
-                }
+            let group = Group {
+                n,
+                nc,
+                count,
+                base: &base,
+                stride,
+                contiguous: axis != 0,
+            };
+            #[cfg(target_arch = "x86_64")]
+            if avx2 {
+                // SAFETY: the CPU supports AVX2 (checked once per sweep). The AVX2 build
+                // does the same arithmetic in the same order (no fused multiply-add: Rust
+                // never contracts a*b+c), so its results are bit-identical to the portable one.
+                unsafe { group_avx2(s, &group, u_axis, &ptrs, cdt, cut2, kernel) };
+                continue;
             }
-            for l in 0..count {
-                let r = l * nmax..l * nmax + n;
-                let u = &s.u[r.clone()];
-                let w_in: [&[f64]; 3] = std::array::from_fn(|c| {
-                    if c < nc {
-                        &s.w_in[c][r.clone()]
-                    } else {
-                        &[][..]
-                    }
-                });
-                let [o0, o1, o2] = &mut s.w_out;
-                let mut w_out: [&mut [f64]; 3] = [
-                    &mut o0[r.clone()],
-                    if nc > 1 {
-                        &mut o1[r.clone()]
-                    } else {
-                        &mut [][..]
-                    },
-                    if nc > 2 {
-                        &mut o2[r.clone()]
-                    } else {
-                        &mut [][..]
-                    },
-                ];
-                for w in w_out.iter_mut().take(nc) {
-                    w.fill(0.0);
-                }
-                match (kernel, nc) {
-                    (RemeshKernel::M4Prime, 1) => push_remesh_line::<4, 1, 1>(
-                        n,
-                        cdt,
-                        cut2,
-                        u,
-                        &w_in,
-                        &mut w_out,
-                        m4prime_weights,
-                    ),
-                    (RemeshKernel::M4Prime, _) => push_remesh_line::<4, 1, 3>(
-                        n,
-                        cdt,
-                        cut2,
-                        u,
-                        &w_in,
-                        &mut w_out,
-                        m4prime_weights,
-                    ),
-                    (RemeshKernel::Lambda42, 1) => push_remesh_line::<6, 2, 1>(
-                        n,
-                        cdt,
-                        cut2,
-                        u,
-                        &w_in,
-                        &mut w_out,
-                        lambda42_weights,
-                    ),
-                    (RemeshKernel::Lambda42, _) => push_remesh_line::<6, 2, 3>(
-                        n,
-                        cdt,
-                        cut2,
-                        u,
-                        &w_in,
-                        &mut w_out,
-                        lambda42_weights,
-                    ),
-                }
-            }
-            for p in 0..n {
-                let idx = base + p * stride;
-                for c in 0..nc {
-                    for l in 0..count {
-                        // SAFETY: as above.
-                        unsafe { ptrs[c].write(idx + l, s.w_out[c][l * nmax + p]) };
-                    }
-                }
-            }
+            group_generic(s, &group, u_axis, &ptrs, cdt, cut2, kernel);
         }
     });
 }
 
-/// Push the particles of one periodic line and remesh them with an `N`-point kernel whose
-/// first node is `LEFT` nodes left of the particle's base node.
+/// One group of lines of a sweep: `count` real lines of `n` nodes whose first nodes are
+/// `base` and whose nodes are `stride` apart; with `contiguous`, `base[l] = base[0] + l`.
+struct Group<'a> {
+    n: usize,
+    nc: usize,
+    count: usize,
+    base: &'a [usize; LANES],
+    stride: usize,
+    contiguous: bool,
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn group_avx2(
+    s: &mut LineScratch,
+    g: &Group,
+    u_axis: &[f64],
+    ptrs: &[SyncPtr<f64>; 3],
+    cdt: f64,
+    cut2: f64,
+    kernel: RemeshKernel,
+) {
+    group_generic(s, g, u_axis, ptrs, cdt, cut2, kernel);
+}
+
+/// Gather a group, push and remesh its particles, and write it back.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn push_remesh_line<const N: usize, const LEFT: i64, const NC: usize>(
+fn group_generic(
+    s: &mut LineScratch,
+    g: &Group,
+    u_axis: &[f64],
+    ptrs: &[SyncPtr<f64>; 3],
+    cdt: f64,
+    cut2: f64,
+    kernel: RemeshKernel,
+) {
+    let (n, nc) = (g.n, g.nc);
+    gather(s, g, u_axis, ptrs);
+    match (kernel, nc) {
+        (RemeshKernel::M4Prime, 1) => {
+            push_remesh_group::<4, 1, 1>(s, n, cdt, cut2, m4prime_weights)
+        }
+        (RemeshKernel::M4Prime, _) => {
+            push_remesh_group::<4, 1, 3>(s, n, cdt, cut2, m4prime_weights)
+        }
+        (RemeshKernel::Lambda42, 1) => {
+            push_remesh_group::<6, 2, 1>(s, n, cdt, cut2, lambda42_weights)
+        }
+        (RemeshKernel::Lambda42, _) => {
+            push_remesh_group::<6, 2, 3>(s, n, cdt, cut2, lambda42_weights)
+        }
+    }
+    for c in 0..nc {
+        let out = &s.w_out[c];
+        for p in 0..n {
+            let row = &out[p * LANES..p * LANES + g.count];
+            if g.contiguous {
+                // SAFETY: the lines of this group belong to this task only, and with
+                // `contiguous` its lanes' nodes are the `count` consecutive ones from here.
+                let dst = unsafe {
+                    std::slice::from_raw_parts_mut(ptrs[c].0.add(g.base[0] + p * g.stride), g.count)
+                };
+                if g.count == LANES {
+                    dst.copy_from_slice(&out[p * LANES..(p + 1) * LANES]);
+                } else {
+                    dst.copy_from_slice(row);
+                }
+            } else {
+                for (l, &v) in row.iter().enumerate() {
+                    // SAFETY: the lines of this group belong to this task only.
+                    unsafe { ptrs[c].write(g.base[l] + p * g.stride, v) };
+                }
+            }
+        }
+    }
+}
+
+/// Copy a group's lines into the interleaved scratch (lanes past `count` are zero: no
+/// vorticity, so they create no particle) and fill the velocity's periodic ghost nodes.
+#[inline(always)]
+fn gather(s: &mut LineScratch, g: &Group, u_axis: &[f64], ptrs: &[SyncPtr<f64>; 3]) {
+    let (n, count) = (g.n, g.count);
+    for p in 0..n {
+        let at = g.base[0] + p * g.stride;
+        let u = &mut s.u[(GHOST + p) * LANES..(GHOST + p + 1) * LANES];
+        if g.contiguous && count == LANES {
+            // Fixed length: an inline vector copy rather than a call to memcpy.
+            u.copy_from_slice(&u_axis[at..at + LANES]);
+        } else if g.contiguous {
+            u[..count].copy_from_slice(&u_axis[at..at + count]);
+        } else {
+            for l in 0..count {
+                u[l] = u_axis[g.base[l] + p * g.stride];
+            }
+        }
+        u[count..].fill(0.0);
+        for c in 0..g.nc {
+            let w = &mut s.w_in[c][p * LANES..(p + 1) * LANES];
+            if g.contiguous {
+                // SAFETY: the lines of this group belong to this task only, and with
+                // `contiguous` its lanes' nodes are the `count` consecutive ones from here.
+                let src = unsafe { std::slice::from_raw_parts(ptrs[c].0.add(at), count) };
+                if count == LANES {
+                    w.copy_from_slice(src);
+                } else {
+                    w[..count].copy_from_slice(src);
+                }
+            } else {
+                for l in 0..count {
+                    // SAFETY: the lines of this group belong to this task only.
+                    w[l] = unsafe { ptrs[c].read(g.base[l] + p * g.stride) };
+                }
+            }
+            w[count..].fill(0.0);
+        }
+    }
+    let ni = n as i64;
+    for g in 0..GHOST {
+        // Left ghost g is node g - GHOST, right ghost g is node n + g (both wrapped).
+        let left = (g as i64 - GHOST as i64).rem_euclid(ni) as usize;
+        let right = (ni + g as i64).rem_euclid(ni) as usize;
+        s.u.copy_within(
+            (GHOST + left) * LANES..(GHOST + left + 1) * LANES,
+            g * LANES,
+        );
+        s.u.copy_within(
+            (GHOST + right) * LANES..(GHOST + right + 1) * LANES,
+            (GHOST + n + g) * LANES,
+        );
+    }
+}
+
+/// Push the particles of a group of `LANES` periodic lines (interleaved in `s`) and remesh
+/// them with an `N`-point kernel whose first node is `LEFT` nodes left of the particle's base
+/// node. Every lane does the arithmetic of the one-line algorithm in the same order, so a
+/// node's value does not depend on which lines share its group.
+#[inline(always)]
+fn push_remesh_group<const N: usize, const LEFT: i64, const NC: usize>(
+    s: &mut LineScratch,
     n: usize,
     cdt: f64,
     cut2: f64,
-    u: &[f64],
-    w_in: &[&[f64]; 3],
-    w_out: &mut [&mut [f64]; 3],
     weights: impl Fn(f64) -> [f64; N],
 ) {
     let ni = n as i64;
     let right = N as i64 - LEFT;
+    // The velocity line with its ghosts spans node indices -GHOST .. n + GHOST.
+    let lo = LEFT - GHOST as i64;
+    let hi = ni + GHOST as i64 - right;
+    let u = &s.u[..(n + 2 * GHOST) * LANES];
+    let w_in: [&[f64]; NC] = std::array::from_fn(|c| &s.w_in[c][..n * LANES]);
+    let (o0, rest) = s.w_out.split_at_mut(1);
+    let (o1, o2) = rest.split_at_mut(1.min(rest.len()));
+    let mut outs: [&mut [f64]; 3] = [
+        &mut o0[0][..n * LANES],
+        o1.first_mut().map_or(&mut [][..], |v| &mut v[..n * LANES]),
+        o2.first_mut().map_or(&mut [][..], |v| &mut v[..n * LANES]),
+    ];
+    for o in outs.iter_mut().take(NC) {
+        o.fill(0.0);
+    }
     for p in 0..n {
-        let mut m2 = 0.0;
-        for c in 0..NC {
-            m2 += w_in[c][p] * w_in[c][p];
+        let pf = p as f64;
+        let row = p * LANES;
+        // Lane-wise (vectorised): which lanes hold a particle, and the kernel weights at
+        // the mid-step position x_mid = p + Δt/2 u(p) (grid units).
+        let mut active = [false; LANES];
+        let mut wm = [[0.0; N]; LANES];
+        let mut bm = [0i64; LANES];
+        for l in 0..LANES {
+            let mut m2 = 0.0;
+            for w in &w_in {
+                m2 += w[row + l] * w[row + l];
+            }
+            active[l] = m2 > cut2;
+            let x_mid = pf + 0.5 * cdt * u[(GHOST + p) * LANES + l];
+            let b = x_mid.floor();
+            wm[l] = weights(x_mid - b);
+            bm[l] = b as i64;
         }
-        if m2 <= cut2 {
-            for c in 0..NC {
-                w_out[c][p] += w_in[c][p];
-            }
-            continue;
-        }
-        // RK2 midpoint: x_mid = p + Δt/2 u(p); x_new = p + Δt u(x_mid) (grid units).
-        let x_mid = p as f64 + 0.5 * cdt * u[p];
-        let (b, f) = split(x_mid);
-        let w = weights(f);
-        let u_mid = if b >= LEFT && b + right <= ni {
-            let s = (b - LEFT) as usize;
+        // The velocity at x_mid, then x_new = p + Δt u(x_mid).
+        let mut wn = [[0.0; N]; LANES];
+        let mut bn = [0i64; LANES];
+        for l in 0..LANES {
+            let b = bm[l];
+            let w = &wm[l];
             let mut acc = 0.0;
-            for q in 0..N {
-                acc += w[q] * u[s + q];
-            }
-            acc
-        } else {
-            let mut acc = 0.0;
-            for (q, wq) in w.iter().enumerate() {
-                acc += wq * u[(b - LEFT + q as i64).rem_euclid(ni) as usize];
-            }
-            acc
-        };
-        let x_new = p as f64 + cdt * u_mid;
-        let (b, f) = split(x_new);
-        let w = weights(f);
-        if b >= LEFT && b + right <= ni {
-            let s0 = (b - LEFT) as usize;
-            for c in 0..NC {
-                let s = w_in[c][p];
-                let o = &mut w_out[c][s0..s0 + N];
+            if b >= lo && b <= hi {
+                let s0 = (b - LEFT + GHOST as i64) as usize;
                 for q in 0..N {
-                    o[q] += w[q] * s;
+                    acc += w[q] * u[(s0 + q) * LANES + l];
+                }
+            } else {
+                for q in 0..N {
+                    let t = (b - LEFT + q as i64).rem_euclid(ni) as usize;
+                    acc += w[q] * u[(GHOST + t) * LANES + l];
                 }
             }
-        } else {
-            for (q, wq) in w.iter().enumerate() {
-                let t = (b - LEFT + q as i64).rem_euclid(ni) as usize;
+            let x_new = pf + cdt * acc;
+            let b = x_new.floor();
+            wn[l] = weights(x_new - b);
+            bn[l] = b as i64;
+        }
+        // Remesh: a particle adds its strength times the weights to the N nodes around
+        // x_new; below the cutoff the node keeps its value.
+        for l in 0..LANES {
+            if !active[l] {
                 for c in 0..NC {
-                    w_out[c][t] += wq * w_in[c][p];
+                    outs[c][row + l] += w_in[c][row + l];
+                }
+                continue;
+            }
+            let b = bn[l];
+            let w = &wn[l];
+            if b >= LEFT && b + right <= ni {
+                let s0 = (b - LEFT) as usize;
+                for c in 0..NC {
+                    let sv = w_in[c][row + l];
+                    let o = &mut outs[c][s0 * LANES + l..];
+                    for q in 0..N {
+                        o[q * LANES] += w[q] * sv;
+                    }
+                }
+            } else {
+                for q in 0..N {
+                    let t = (b - LEFT + q as i64).rem_euclid(ni) as usize;
+                    for c in 0..NC {
+                        outs[c][t * LANES + l] += w[q] * w_in[c][row + l];
+                    }
                 }
             }
         }
