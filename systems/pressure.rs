@@ -142,20 +142,52 @@ impl PressureSolver {
     }
 }
 
-/// Index steps along each axis and the node's periodic neighbours below and above it.
-#[inline]
-fn neighbours(grid: &Grid, i: usize, j: usize, k: usize) -> [(usize, usize); 3] {
-    let [nx, ny, nz] = grid.n;
-    let nb = crate::base::grid::periodic_neighbours;
-    let id = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
-    let (im, ip) = nb(i, nx);
-    let (jm, jp) = nb(j, ny);
-    let (km, kp) = if grid.dim == 3 { nb(k, nz) } else { (k, k) };
-    [
-        (id(im, j, k), id(ip, j, k)),
-        (id(i, jm, k), id(i, jp, k)),
-        (id(i, j, km), id(i, j, kp)),
-    ]
+/// The periodic neighbours of the nodes of one row along x: the row's first node and the first
+/// nodes of the rows below and above it in y and z, so a node's neighbours cost two additions
+/// instead of a division and three wraps.
+#[derive(Clone, Copy)]
+struct RowNeighbours {
+    nx: usize,
+    c0: usize,
+    below: [usize; 2],
+    above: [usize; 2],
+}
+
+impl RowNeighbours {
+    /// The row `row = j + ny k` of `grid`.
+    #[inline]
+    fn new(grid: &Grid, row: usize) -> Self {
+        let [nx, ny, nz] = grid.n;
+        let (j, k) = (row % ny, row / ny);
+        let nb = crate::base::grid::periodic_neighbours;
+        let (jm, jp) = nb(j, ny);
+        let (km, kp) = if grid.dim == 3 { nb(k, nz) } else { (k, k) };
+        let start = |j: usize, k: usize| nx * (j + ny * k);
+        RowNeighbours {
+            nx,
+            c0: nx * row,
+            below: [start(jm, k), start(j, km)],
+            above: [start(jp, k), start(j, kp)],
+        }
+    }
+
+    /// Node `i` of the row and its neighbours (below, above) along each axis.
+    #[inline(always)]
+    fn at(&self, i: usize) -> (usize, [(usize, usize); 3]) {
+        let (im, ip) = if i > 0 && i + 1 < self.nx {
+            (i - 1, i + 1)
+        } else {
+            crate::base::grid::periodic_neighbours(i, self.nx)
+        };
+        (
+            self.c0 + i,
+            [
+                (self.c0 + im, self.c0 + ip),
+                (self.below[0] + i, self.above[0] + i),
+                (self.below[1] + i, self.above[1] + i),
+            ],
+        )
+    }
 }
 
 /// The gravity force density on the face between nodes `lo` and `hi = lo + e_a`,
@@ -167,20 +199,43 @@ fn gravity_face(phase: &[f64], g: [f64; 3], gg: [f64; 3], a: usize, lo: usize, h
     0.5 * (phase[lo] + phase[hi]) * g[a] - gg[a]
 }
 
-/// `out = A x` with A = -∇·(β∇) (compact stencil, periodic), times h².
-fn apply(grid: &Grid, beta: &[Vec<f64>], x: &[f64], out: &mut [f64]) {
-    let [nx, ny, _] = grid.n;
-    let dim = grid.dim;
+/// `out = A x` with A = -∇·(β∇) (compact stencil, periodic), times h². Row by row, with the
+/// neighbour rows as slices and the interior of a row in one branch-free loop.
+fn apply<'a>(grid: &Grid, beta: &'a [Vec<f64>], x: &'a [f64], out: &mut [f64]) {
+    let nx = grid.n[0];
+    let three = grid.dim == 3;
     out.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
-        let (j, k) = (row % ny, row / ny);
-        for (i, v) in o.iter_mut().enumerate() {
-            let c = i + nx * row;
-            let nbs = neighbours(grid, i, j, k);
+        let rn = RowNeighbours::new(grid, row);
+        let line = |f: &'a [f64], at: usize| -> &'a [f64] { &f[at..at + nx] };
+        let (xc, bx) = (line(x, rn.c0), line(&beta[0], rn.c0));
+        let (ym, yp) = (line(x, rn.below[0]), line(x, rn.above[0]));
+        let (by, bym) = (line(&beta[1], rn.c0), line(&beta[1], rn.below[0]));
+        let (zm, zp, bz, bzm) = if three {
+            (
+                line(x, rn.below[1]),
+                line(x, rn.above[1]),
+                line(&beta[2], rn.c0),
+                line(&beta[2], rn.below[1]),
+            )
+        } else {
+            (xc, xc, bx, bx)
+        };
+        let node = |i: usize, im: usize, ip: usize| {
+            let c = xc[i];
             let mut s = 0.0;
-            for (a, &(m, p)) in nbs.iter().enumerate().take(dim) {
-                s += beta[a][c] * (x[c] - x[p]) + beta[a][m] * (x[c] - x[m]);
+            s += bx[i] * (c - xc[ip]) + bx[im] * (c - xc[im]);
+            s += by[i] * (c - yp[i]) + bym[i] * (c - ym[i]);
+            if three {
+                s += bz[i] * (c - zp[i]) + bzm[i] * (c - zm[i]);
             }
-            *v = s;
+            s
+        };
+        for i in 1..nx.saturating_sub(1) {
+            o[i] = node(i, i - 1, i + 1);
+        }
+        for i in [0, nx - 1] {
+            let (im, ip) = crate::base::grid::periodic_neighbours(i, nx);
+            o[i] = node(i, im, ip);
         }
     });
 }
@@ -237,15 +292,25 @@ fn solve(
     if rnorm <= TOLERANCE * bnorm {
         return (0, rnorm / bnorm);
     }
-    // The preconditioner: A⁻¹ for β = 1, (-h² Lap_h)⁻¹.
+    // The preconditioner z = M r, M = A⁻¹ for β = 1, (-h² Lap_h)⁻¹; returns r·z (the scaling
+    // and the dot product in one pass).
     let inv_h2 = 1.0 / (grid.h * grid.h);
-    let precondition = |spectral: &mut Spectral, r: &[f64], z: &mut [f64]| {
+    let precondition = |spectral: &mut Spectral, partial: &mut [f64], r: &[f64], z: &mut [f64]| {
         spectral.solve_laplacian(r, z);
-        z.par_iter_mut().for_each(|v| *v *= inv_h2);
+        partial
+            .par_iter_mut()
+            .zip(z.par_chunks_mut(nx))
+            .zip(r.par_chunks(nx))
+            .for_each(|((s, z), r)| {
+                for v in z.iter_mut() {
+                    *v *= inv_h2;
+                }
+                *s = r.iter().zip(z.iter()).map(|(x, y)| x * y).sum();
+            });
+        partial.iter().sum::<f64>()
     };
-    precondition(spectral, r, z);
+    let mut rz = precondition(spectral, partial, r, z);
     p.copy_from_slice(z);
-    let mut rz = dot(partial, nx, r, z);
     let mut it = 0;
     while it < MAX_ITERATIONS {
         it += 1;
@@ -255,18 +320,24 @@ fn solve(
             break;
         }
         let alpha = rz / pap;
-        phi.par_iter_mut()
-            .zip(p.par_iter())
-            .for_each(|(x, p)| *x += alpha * p);
-        r.par_iter_mut()
-            .zip(ap.par_iter())
-            .for_each(|(r, a)| *r -= alpha * a);
-        rnorm = dot(partial, nx, r, r).sqrt();
+        // φ += α p, r -= α Ap and |r|² in one pass (per row, then rows in order).
+        partial
+            .par_iter_mut()
+            .zip(phi.par_chunks_mut(nx))
+            .zip(r.par_chunks_mut(nx))
+            .zip(p.par_chunks(nx).zip(ap.par_chunks(nx)))
+            .for_each(|(((s, x), r), (p, a))| {
+                for i in 0..x.len() {
+                    x[i] += alpha * p[i];
+                    r[i] -= alpha * a[i];
+                }
+                *s = r.iter().map(|v| v * v).sum();
+            });
+        rnorm = partial.iter().sum::<f64>().sqrt();
         if rnorm <= TOLERANCE * bnorm {
             break;
         }
-        precondition(spectral, r, z);
-        let rz_new = dot(partial, nx, r, z);
+        let rz_new = precondition(spectral, partial, r, z);
         let b = rz_new / rz;
         rz = rz_new;
         p.par_iter_mut()
@@ -293,7 +364,7 @@ pub fn pressure(
     let state = &mut *state;
     let dt = time.dt;
     let dim = grid.dim;
-    let [nx, ny, _] = grid.n;
+    let nx = grid.n[0];
     let h = grid.h;
     let solver = &mut *solver;
     let bf = &mut *bf;
@@ -302,10 +373,10 @@ pub fn pressure(
     for a in 0..dim {
         let beta = &mut solver.beta[a];
         beta.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
-            let (j, k) = (row % ny, row / ny);
+            let rn = RowNeighbours::new(&grid, row);
             for (i, v) in o.iter_mut().enumerate() {
-                let c = i + nx * row;
-                let p = neighbours(&grid, i, j, k)[a].1;
+                let (c, nbs) = rn.at(i);
+                let p = nbs[a].1;
                 *v = 2.0 / (rho[c] + rho[p]);
             }
         });
@@ -324,10 +395,9 @@ pub fn pressure(
         let inv2h = 0.5 / h;
         let src = crate::base::grid::component_ptrs(&mut solver.src);
         (0..grid.len() / nx).into_par_iter().for_each(|row| {
-            let (j, k) = (row % ny, row / ny);
+            let rn = RowNeighbours::new(&grid, row);
             for i in 0..nx {
-                let c = i + nx * row;
-                let nbs = neighbours(&grid, i, j, k);
+                let (c, nbs) = rn.at(i);
                 for q in 0..dim {
                     let mut adv = 0.0;
                     for (b, &(m, p)) in nbs.iter().enumerate().take(dim) {
@@ -348,10 +418,9 @@ pub fn pressure(
             .par_chunks_mut(nx)
             .enumerate()
             .for_each(|(row, o)| {
-                let (j, k) = (row % ny, row / ny);
+                let rn = RowNeighbours::new(&grid, row);
                 for (i, v) in o.iter_mut().enumerate() {
-                    let c = i + nx * row;
-                    let nbs = neighbours(&grid, i, j, k);
+                    let (c, nbs) = rn.at(i);
                     let mut div = 0.0;
                     for (a, &(m, p)) in nbs.iter().enumerate().take(dim) {
                         let face = |lo: usize, hi: usize| {
@@ -382,10 +451,9 @@ pub fn pressure(
         let du = crate::base::grid::component_ptrs(&mut bf.du);
         let inv_h = 1.0 / h;
         (0..grid.len() / nx).into_par_iter().for_each(|row| {
-            let (j, k) = (row % ny, row / ny);
+            let rn = RowNeighbours::new(&grid, row);
             for i in 0..nx {
-                let c = i + nx * row;
-                let nbs = neighbours(&grid, i, j, k);
+                let (c, nbs) = rn.at(i);
                 for (a, &(m, p)) in nbs.iter().enumerate().take(dim) {
                     let face = |lo: usize, hi: usize| {
                         (dt * gravity_face(phase, g, gg, a, lo, hi) - (phi[hi] - phi[lo]) * inv_h)
