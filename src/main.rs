@@ -546,6 +546,17 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
         systems.insert(n.to_string(), serde_json::json!(median_p90(&mut v).0));
     }
     let g = sim.grid();
+    // Peak memory of the run, before the floor's own buffers.
+    let peak = peak_memory_bytes();
+    // The FFT floor of the same grid, measured now in this process: the step as a ratio to it.
+    let floor = tumble::solvers::fft::floor_seconds(g, 7);
+    let mut floors = serde_json::Map::new();
+    for (n, s) in &systems {
+        floors.insert(
+            n.clone(),
+            serde_json::json!(s.as_f64().unwrap_or(0.0) / floor),
+        );
+    }
     let mut line = serde_json::json!({
         "scene": name,
         "cells": g.len(),
@@ -556,7 +567,10 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
         "median_s_per_step": med,
         "p90_s_per_step": p90,
         "median_s_per_system": systems,
-        "peak_memory_bytes": peak_memory_bytes(),
+        "fft_floor_s": floor,
+        "step_per_fft_floor": med / floor,
+        "system_per_fft_floor": floors,
+        "peak_memory_bytes": peak,
     });
     if !iterations.is_empty() {
         line["median_pressure_iterations"] = serde_json::json!(median_p90(&mut iterations).0);

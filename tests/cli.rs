@@ -356,6 +356,13 @@ fn bench_prints_one_json_line() {
     assert_eq!(v["steps"], 3);
     assert!(v["median_s_per_step"].as_f64().unwrap() > 0.0);
     assert!(v["median_s_per_system"]["transport"].as_f64().is_some());
+    // The step as a ratio to the FFT floor of the same grid, measured in the same process.
+    let floor = v["fft_floor_s"].as_f64().unwrap();
+    let ratio = v["step_per_fft_floor"].as_f64().unwrap();
+    assert!(floor > 0.0);
+    let med = v["median_s_per_step"].as_f64().unwrap();
+    assert!((ratio - med / floor).abs() <= 1e-9 * ratio);
+    assert!(v["system_per_fft_floor"]["transport"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -523,3 +523,36 @@ impl FftEngine {
         self.eng.inverse(&mut self.pool, src, work, out);
     }
 }
+
+/// The FFT floor of `grid`: seconds for 3 real-to-complex and 3 complex-to-real transforms of
+/// the grid with this engine (the transforms of one velocity solve of a 3D vector field), the
+/// median of `reps` repetitions. `tumble bench` divides its step time by it, so a figure
+/// can be compared across machines and days.
+pub fn floor_seconds(grid: &Grid, reps: usize) -> f64 {
+    let mut eng = FftEngine::new(grid);
+    let real: Vec<Vec<f64>> = (0..3)
+        .map(|c| {
+            (0..eng.real_len())
+                .map(|i| ((i * 7 + c * 13) % 17) as f64 - 8.0)
+                .collect()
+        })
+        .collect();
+    let mut out = vec![vec![0.0; eng.real_len()]; 3];
+    let mut spec = vec![vec![C64::default(); eng.complex_len()]; 3];
+    let mut times: Vec<f64> = (0..reps.max(1) + 1)
+        .map(|_| {
+            let t0 = std::time::Instant::now();
+            for c in 0..3 {
+                eng.forward(&real[c], &mut spec[c]);
+            }
+            for c in 0..3 {
+                eng.inverse(None, &mut spec[c], &mut out[c]);
+            }
+            t0.elapsed().as_secs_f64()
+        })
+        .collect();
+    // The first repetition warms the caches and the thread pool; it is not counted.
+    times.remove(0);
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
