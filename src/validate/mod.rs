@@ -492,7 +492,7 @@ pub const CASES: &[Case] = &[
         description: "the paper's Fig. 10: a cup of density 1.2 dropped onto water enters it, rises again briefly after the impact, turns, fills and ends on the floor; liquid volume within 1%",
         reference: "Coquerelle & Cottet 2008, section 5, Fig. 10",
         full: "scenes/cup.ron (128^3, ratio 1:100) to t = 0.6",
-        quick: "scenes/cup.ron at 64^3",
+        quick: "scenes/cup.ron at 48^3 (until it blows up, about 40 s on 2 cores)",
         full_time: RunTime::Long,
         quick_time: RunTime::Minutes,
         run: free_surface::cup,
@@ -500,7 +500,7 @@ pub const CASES: &[Case] = &[
             row: "the run reaches t = 0.6 without blowing up",
             quick: true,
             full: true,
-            why: "blows up after the cup enters the water (64^3, ratio 1:100: max |vorticity| grows from 2e3 at t = 0.025 to 1e5 at t = 0.031), in the gas one or two cells outside the cup's wall at the waterline; at 1:10 at t = 0.047, 1:5 at 0.050, 1:2 at 0.092. The free surface is not the root: the same cup falling in water alone (no free surface) blows up at t = 0.21, after it lands, next to the floor; with viscosity 1e-3 instead of 1e-4 that run reaches t = 0.6. Without the vortex stretching term (a test switch, not a model) both the 1:100 run and the run in water go on (t = 0.043 and 0.6), so it is the stretching of the under-resolved shear layers (cell Reynolds number |u| h / nu of 300 to 1500) that grows without bound. Not the cause: second-order instead of fourth-order differences in the stretching (t = 0.25 in water), the frozen instead of the extrapolated mid-step velocity (t = 0.20), a smaller step (worse), a thicker cup wall (t = 0.18). A Smagorinsky eddy viscosity (C_s = 0.17) delays it (t = 0.30 in water, about 0.055 at 1:100) without stopping it; issue 17",
+            why: "blows up after the cup enters the water (quick tier, 48^3: max |u| passes the limit at t = 0.060; 64^3, ratio 1:100: max |vorticity| grows from 2e3 at t = 0.025 to 1e5 at t = 0.031), in the gas one or two cells outside the cup's wall at the waterline; at 1:10 at t = 0.047, 1:5 at 0.050, 1:2 at 0.092. The free surface is not the root: the same cup falling in water alone (no free surface) blows up at t = 0.21, after it lands, next to the floor; with viscosity 1e-3 instead of 1e-4 that run reaches t = 0.6. Without the vortex stretching term (a test switch, not a model) both the 1:100 run and the run in water go on (t = 0.043 and 0.6), so it is the stretching of the under-resolved shear layers (cell Reynolds number |u| h / nu of 300 to 1500) that grows without bound. Not the cause: second-order instead of fourth-order differences in the stretching (t = 0.25 in water), the frozen instead of the extrapolated mid-step velocity (t = 0.20), a smaller step (worse), a thicker cup wall (t = 0.18). A Smagorinsky eddy viscosity (C_s = 0.17) delays it (t = 0.30 in water, about 0.055 at 1:100) without stopping it; issue 17",
         }],
     },
 ];
