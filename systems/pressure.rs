@@ -199,45 +199,57 @@ fn gravity_face(phase: &[f64], g: [f64; 3], gg: [f64; 3], a: usize, lo: usize, h
     0.5 * (phase[lo] + phase[hi]) * g[a] - gg[a]
 }
 
-/// `out = A x` with A = -∇·(β∇) (compact stencil, periodic), times h². Row by row, with the
-/// neighbour rows as slices and the interior of a row in one branch-free loop.
-fn apply<'a>(grid: &Grid, beta: &'a [Vec<f64>], x: &'a [f64], out: &mut [f64]) {
+/// `out = A x` with A = -∇·(β∇) (compact stencil, periodic), times h², and x·Ax in the same
+/// pass (per row into `partial`, then the rows in order: the same sum as [`dot`]). Row by row,
+/// with the neighbour rows as slices and the interior of a row in one branch-free loop.
+fn apply<'a>(
+    grid: &Grid,
+    beta: &'a [Vec<f64>],
+    x: &'a [f64],
+    out: &mut [f64],
+    partial: &mut [f64],
+) -> f64 {
     let nx = grid.n[0];
     let three = grid.dim == 3;
-    out.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
-        let rn = RowNeighbours::new(grid, row);
-        let line = |f: &'a [f64], at: usize| -> &'a [f64] { &f[at..at + nx] };
-        let (xc, bx) = (line(x, rn.c0), line(&beta[0], rn.c0));
-        let (ym, yp) = (line(x, rn.below[0]), line(x, rn.above[0]));
-        let (by, bym) = (line(&beta[1], rn.c0), line(&beta[1], rn.below[0]));
-        let (zm, zp, bz, bzm) = if three {
-            (
-                line(x, rn.below[1]),
-                line(x, rn.above[1]),
-                line(&beta[2], rn.c0),
-                line(&beta[2], rn.below[1]),
-            )
-        } else {
-            (xc, xc, bx, bx)
-        };
-        let node = |i: usize, im: usize, ip: usize| {
-            let c = xc[i];
-            let mut s = 0.0;
-            s += bx[i] * (c - xc[ip]) + bx[im] * (c - xc[im]);
-            s += by[i] * (c - yp[i]) + bym[i] * (c - ym[i]);
-            if three {
-                s += bz[i] * (c - zp[i]) + bzm[i] * (c - zm[i]);
+    out.par_chunks_mut(nx)
+        .zip(partial.par_iter_mut())
+        .enumerate()
+        .for_each(|(row, (o, xax))| {
+            let rn = RowNeighbours::new(grid, row);
+            let line = |f: &'a [f64], at: usize| -> &'a [f64] { &f[at..at + nx] };
+            let (xc, bx) = (line(x, rn.c0), line(&beta[0], rn.c0));
+            let (ym, yp) = (line(x, rn.below[0]), line(x, rn.above[0]));
+            let (by, bym) = (line(&beta[1], rn.c0), line(&beta[1], rn.below[0]));
+            let (zm, zp, bz, bzm) = if three {
+                (
+                    line(x, rn.below[1]),
+                    line(x, rn.above[1]),
+                    line(&beta[2], rn.c0),
+                    line(&beta[2], rn.below[1]),
+                )
+            } else {
+                (xc, xc, bx, bx)
+            };
+            let node = |i: usize, im: usize, ip: usize| {
+                let c = xc[i];
+                let mut s = 0.0;
+                s += bx[i] * (c - xc[ip]) + bx[im] * (c - xc[im]);
+                s += by[i] * (c - yp[i]) + bym[i] * (c - ym[i]);
+                if three {
+                    s += bz[i] * (c - zp[i]) + bzm[i] * (c - zm[i]);
+                }
+                s
+            };
+            for i in 1..nx.saturating_sub(1) {
+                o[i] = node(i, i - 1, i + 1);
             }
-            s
-        };
-        for i in 1..nx.saturating_sub(1) {
-            o[i] = node(i, i - 1, i + 1);
-        }
-        for i in [0, nx - 1] {
-            let (im, ip) = crate::base::grid::periodic_neighbours(i, nx);
-            o[i] = node(i, im, ip);
-        }
-    });
+            for i in [0, nx - 1] {
+                let (im, ip) = crate::base::grid::periodic_neighbours(i, nx);
+                o[i] = node(i, im, ip);
+            }
+            *xax = xc.iter().zip(o.iter()).map(|(x, y)| x * y).sum();
+        });
+    partial.iter().sum()
 }
 
 /// Σ a_i b_i, summed per row and then over rows in order.
@@ -284,7 +296,7 @@ fn solve(
         phi.par_iter_mut().for_each(|v| *v = 0.0);
         return (0, 0.0);
     }
-    apply(grid, beta, phi, ap);
+    apply(grid, beta, phi, ap, partial);
     r.par_iter_mut()
         .zip(ap.par_iter())
         .for_each(|(r, a)| *r -= a);
@@ -314,8 +326,7 @@ fn solve(
     let mut it = 0;
     while it < MAX_ITERATIONS {
         it += 1;
-        apply(grid, beta, p, ap);
-        let pap = dot(partial, nx, p, ap);
+        let pap = apply(grid, beta, p, ap, partial);
         if pap <= 0.0 {
             break;
         }

@@ -7,7 +7,7 @@
 //! (`numerics.midpoint_velocity: false`, and on the first step) the step is first order in time;
 //! with the mid-step velocity it is second order.
 //!
-//! * Stretching (3D only): (ω·∇)u with ∇u by fourth-order centred differences, integrated at
+//! * Stretching (3D only): (ω·∇)u with ∇u by eighth-order centred differences, integrated at
 //!   every node with the midpoint rule ω ← ω + Δt G(ω + Δt/2 G ω), G = ∇u frozen. It runs
 //!   before the advection sweeps on even steps and after them on odd steps, so that over two
 //!   steps the splitting is symmetric (S X Y Z | Z Y X S) and second order. Always stretching
@@ -45,8 +45,6 @@ const CHUNKS: usize = 32;
 #[derive(Resource)]
 pub struct TransportScratch {
     pool: Vec<LineScratch>,
-    /// The velocity that carries the particles this step.
-    u_mid: Vec<Vec<f64>>,
     /// Whether the next step sweeps axes in reverse order.
     reverse: bool,
 }
@@ -59,7 +57,6 @@ impl TransportScratch {
         let pool = (0..CHUNKS).map(|_| LineScratch::new(nmax, nc)).collect();
         TransportScratch {
             pool,
-            u_mid: vec![vec![0.0; grid.len()]; grid.dim],
             reverse: false,
         }
     }
@@ -94,18 +91,19 @@ pub fn transport(
     } else {
         0.0
     };
-    for ((um, u), up) in scratch.u_mid.iter_mut().zip(&fields.u).zip(&fields.u_prev) {
-        um.par_chunks_mut(4096)
+    // The mid-step velocity, made in place of the previous one (the Poisson solve restores
+    // u_prev's meaning when it swaps in the new velocity).
+    let (omega, u, u_mid) = fields.transport_parts();
+    for (m, u) in u_mid.iter_mut().zip(u) {
+        m.par_chunks_mut(4096)
             .zip(u.par_chunks(4096))
-            .zip(up.par_chunks(4096))
-            .for_each(|((m, u), p)| {
+            .for_each(|(m, u)| {
                 for i in 0..m.len() {
-                    m[i] = u[i] + a * (u[i] - p[i]);
+                    m[i] = u[i] + a * (u[i] - m[i]);
                 }
             });
     }
-    let u = &scratch.u_mid;
-    let omega = fields.omega_mut();
+    let u = &*u_mid;
     if grid.dim == 3 && !scratch.reverse {
         stretch(&grid, dt, omega, u);
     }
@@ -144,13 +142,20 @@ pub fn max_norm(omega: &[Vec<f64>]) -> f64 {
         .sqrt()
 }
 
-/// Stretching (ω·∇)u at every node, midpoint rule in time with ∇u frozen; ∇u by fourth-order
-/// centred differences. Works row by row: the ten neighbour rows (±1, ±2 in y and z) are
-/// plain slices, so the inner loop over x is simple indexing.
-fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
+/// Half-width of the stretching's centred difference stencil.
+const R: usize = STRETCH_COEFFS.len();
+
+/// Signed weights of f(x + m h) - f(x - m h), m = 1..=R, in the eighth-order centred first
+/// difference (times 1/h): 4/5, -1/5, 4/105, -1/280.
+const STRETCH_COEFFS: [f64; 4] = [4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280.0];
+
+/// Stretching (ω·∇)u at every node, midpoint rule in time with ∇u frozen; ∇u by eighth-order
+/// centred differences. Works row by row: the neighbour rows (±1..±R in y and z) are plain
+/// slices, so the inner loop over x is simple indexing.
+pub fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
-    let c = [8.0 / (12.0 * grid.h), 1.0 / (12.0 * grid.h)];
+    let c = STRETCH_COEFFS.map(|c| c / grid.h);
     let (o0, rest) = omega.split_at_mut(1);
     let (o1, o2) = rest.split_at_mut(1);
     #[cfg(target_arch = "x86_64")]
@@ -164,9 +169,9 @@ fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
             for j in 0..ny {
                 let row = |jj: usize, kk: usize| nx * (jj + ny * kk);
                 let r = row(j, k);
-                // Rows at y-2, y-1, y+1, y+2 and z-2, z-1, z+1, z+2.
-                let ry = [-2, -1, 1, 2].map(|d| row(wrap(j, d, ny), k));
-                let rz = [-2, -1, 1, 2].map(|d| row(j, wrap(k, d, nz)));
+                // Rows at y-m and y+m, z-m and z+m (m = 1..=R).
+                let ry = offsets().map(|d| row(wrap(j, d, ny), k));
+                let rz = offsets().map(|d| row(j, wrap(k, d, nz)));
                 let gu = [0, 1, 2].map(|a| rows(&u[a], r, ry, rz, nx));
                 let w = [
                     &mut w0[nx * j..nx * (j + 1)],
@@ -185,40 +190,44 @@ fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
         });
 }
 
-/// Periodic neighbour `i + d` on an axis of `n` nodes (|d| ≤ 2 ≤ n, so one correction
-/// suffices).
+/// The stencil's offsets as [-1, +1, -2, +2, ..., -R, +R].
+fn offsets() -> [isize; 2 * R] {
+    std::array::from_fn(|q| {
+        let m = (q / 2 + 1) as isize;
+        if q % 2 == 0 { -m } else { m }
+    })
+}
+
+/// Periodic neighbour `i + d` on an axis of `n` nodes.
 #[inline(always)]
 fn wrap(i: usize, d: isize, n: usize) -> usize {
-    let j = i as isize + d;
-    let n = n as isize;
-    (if j < 0 {
-        j + n
-    } else if j >= n {
-        j - n
-    } else {
-        j
-    }) as usize
+    (i as isize + d).rem_euclid(n as isize) as usize
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn stretch_row_avx2(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; 2], dt: f64) {
+fn stretch_row_avx2(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; R], dt: f64) {
     stretch_row(gu, w, c, dt);
 }
 
-/// The stretching of one row of nodes along x: the interior in one branch-free loop, the two
+/// The stretching of one row of nodes along x: the interior in one branch-free loop, the R
 /// nodes at each end with wrapped x neighbours.
 #[inline(always)]
-fn stretch_row(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; 2], dt: f64) {
+fn stretch_row(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; R], dt: f64) {
     let nx = w[0].len();
     let [w0, w1, w2] = w;
-    let node = |i: usize, im2: usize, im1: usize, ip1: usize, ip2: usize| {
+    // `x[q]` is the index of neighbour offsets()[q] along x.
+    let node = |i: usize, x: [usize; 2 * R]| {
         let mut g = [[0.0; 3]; 3];
         for a in 0..3 {
             let (fr, fy, fz) = &gu[a];
-            g[a][0] = c[0] * (fr[ip1] - fr[im1]) - c[1] * (fr[ip2] - fr[im2]);
-            g[a][1] = c[0] * (fy[2][i] - fy[1][i]) - c[1] * (fy[3][i] - fy[0][i]);
-            g[a][2] = c[0] * (fz[2][i] - fz[1][i]) - c[1] * (fz[3][i] - fz[0][i]);
+            let (mut gx, mut gy, mut gz) = (0.0, 0.0, 0.0);
+            for m in 0..R {
+                gx += c[m] * (fr[x[2 * m + 1]] - fr[x[2 * m]]);
+                gy += c[m] * (fy[2 * m + 1][i] - fy[2 * m][i]);
+                gz += c[m] * (fz[2 * m + 1][i] - fz[2 * m][i]);
+            }
+            g[a] = [gx, gy, gz];
         }
         g
     };
@@ -239,25 +248,17 @@ fn stretch_row(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; 2], dt: f64) {
         let s = gw(wh);
         [w[0] + dt * s[0], w[1] + dt * s[1], w[2] + dt * s[2]]
     };
-    let ends = [0, 1, nx.saturating_sub(2), nx.saturating_sub(1)];
-    for i in 2..nx.saturating_sub(2) {
-        let g = node(i, i - 2, i - 1, i + 1, i + 2);
+    let off = offsets();
+    let interior = R..nx.saturating_sub(R);
+    for i in interior.clone() {
+        let g = node(i, off.map(|d| (i as isize + d) as usize));
         let r = step(g, [w0[i], w1[i], w2[i]]);
         w0[i] = r[0];
         w1[i] = r[1];
         w2[i] = r[2];
     }
-    for (e, &i) in ends.iter().enumerate() {
-        if i >= nx || ends[..e].contains(&i) || (2..nx.saturating_sub(2)).contains(&i) {
-            continue;
-        }
-        let g = node(
-            i,
-            wrap(i, -2, nx),
-            wrap(i, -1, nx),
-            wrap(i, 1, nx),
-            wrap(i, 2, nx),
-        );
+    for i in (0..nx).filter(|i| !interior.contains(i)) {
+        let g = node(i, off.map(|d| wrap(i, d, nx)));
         let r = step(g, [w0[i], w1[i], w2[i]]);
         w0[i] = r[0];
         w1[i] = r[1];
@@ -265,9 +266,10 @@ fn stretch_row(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; 2], dt: f64) {
     }
 }
 
-/// The row at offset `r` and its y and z neighbour rows, as slices of length `nx`.
-type Rows<'a> = (&'a [f64], [&'a [f64]; 4], [&'a [f64]; 4]);
-fn rows(f: &[f64], r: usize, ry: [usize; 4], rz: [usize; 4], nx: usize) -> Rows<'_> {
+/// The row at offset `r` and its y and z neighbour rows (in the order of [`offsets`]), as
+/// slices of length `nx`.
+type Rows<'a> = (&'a [f64], [&'a [f64]; 2 * R], [&'a [f64]; 2 * R]);
+fn rows(f: &[f64], r: usize, ry: [usize; 2 * R], rz: [usize; 2 * R], nx: usize) -> Rows<'_> {
     (
         &f[r..r + nx],
         ry.map(|o| &f[o..o + nx]),

@@ -7,6 +7,10 @@ use crate::base::grid::Grid;
 use crate::base::params::{BodyCoupling, InterfaceAcceleration, RemeshKernel, TimeStep};
 use bevy_ecs::prelude::Resource;
 
+/// Vorticity (a new version), velocity and previous velocity, as [`Fields::transport_parts`]
+/// hands them out.
+pub type TransportParts<'a> = (&'a mut [Vec<f64>], &'a [Vec<f64>], &'a mut [Vec<f64>]);
+
 /// Vorticity and velocity on the grid.
 ///
 /// The vorticity carries a version number that changes whenever it is handed out mutably, so
@@ -18,7 +22,10 @@ pub struct Fields {
     omega_version: u64,
     /// Velocity, `grid.dim` components.
     pub u: Vec<Vec<f64>>,
-    /// The velocity of the previous step (before the last Poisson solve).
+    /// The velocity of the previous step (before the last Poisson solve). Within a step,
+    /// from transport to the Poisson solve, it holds the mid-step velocity that carried the
+    /// particles instead (transport extrapolates it in place, which saves a vector field);
+    /// the Poisson solve then makes it the previous step's velocity again.
     pub u_prev: Vec<Vec<f64>>,
     /// The step between `u_prev` and `u`; 0 until there is a previous velocity.
     pub dt_prev: f64,
@@ -57,6 +64,13 @@ impl Fields {
     pub fn next_version_parts(&mut self) -> (&mut [Vec<f64>], &mut [Vec<f64>], u64) {
         self.omega_version += 1;
         (&mut self.omega, &mut self.u, self.omega_version)
+    }
+
+    /// Start a new vorticity version and hand out vorticity, velocity and previous velocity
+    /// together (transport, which turns the previous velocity into the mid-step one).
+    pub fn transport_parts(&mut self) -> TransportParts<'_> {
+        self.omega_version += 1;
+        (&mut self.omega, &self.u, &mut self.u_prev)
     }
 
     /// Vorticity and velocity together without starting a new version: only for a solver that

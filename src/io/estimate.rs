@@ -2,7 +2,7 @@
 //! log before a run: an estimate from a model, not a measurement.
 //!
 //! Memory counts the arrays the engine allocates: per grid node, the vorticity, velocity and
-//! previous velocity (`Fields`), the carrying velocity (`TransportScratch`), with bodies the
+//! previous velocity (`Fields`; transport makes the carrying velocity in the last), with bodies the
 //! density, fluid-phase density, Σχ, union φ, penalization increment and owner
 //! (`BodyFields`), with the `Pressure` coupling the face coefficients, source, trial velocity,
 //! conjugate-gradient vectors and φ (`PressureSolver`, `PressureState`), and with a flow the
@@ -82,7 +82,7 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
     let flow = !scene.vacuum;
     let pressure = bodies && flow && scene.numerics.body_coupling == BodyCoupling::Pressure;
     // f64 arrays per node.
-    let mut per_node = nc + 2.0 * d + d; // Fields (ω, u, u_prev) + TransportScratch (u_mid)
+    let mut per_node = nc + 2.0 * d; // Fields (ω, u, u_prev; transport makes the mid-step velocity in u_prev)
     if bodies {
         per_node += 4.0 + d + 0.5; // BodyFields: ρ, ρ_P, χ, φ, du, owner (u32)
     }
