@@ -1,6 +1,7 @@
 //! Spectral operators on the periodic grid, built on the FFT engine ([`crate::solvers::fft`]):
 //! velocity from vorticity (Poisson, Biot-Savart in Fourier space), implicit diffusion with the
-//! second-order difference Laplacian's symbol, the divergence cleaning of a 3D vorticity.
+//! spectral Laplacian's symbol, the divergence cleaning of a 3D vorticity, and the inverse of
+//! the second-order difference Laplacian (the variable-density pressure solve's preconditioner).
 //! Complex fields use the layout described in [`crate::solvers::fft`].
 
 use crate::base::grid::Grid;
@@ -15,6 +16,8 @@ struct Tables {
     kd: [Vec<f64>; 3],
     /// Symbol of minus the second-order difference along each axis: `(2 - 2 cos(k h)) / h^2`.
     lap: [Vec<f64>; 3],
+    /// Symbol of minus the second derivative along each axis, `k^2` (Nyquist included).
+    k2: [Vec<f64>; 3],
 }
 
 impl Tables {
@@ -42,7 +45,8 @@ impl Tables {
                 .map(|&ka| (2.0 - 2.0 * (ka * h).cos()) / (h * h))
                 .collect()
         });
-        Tables { k, kd, lap }
+        let k2 = std::array::from_fn(|a| k[a].iter().map(|&ka| ka * ka).collect());
+        Tables { k, kd, lap, k2 }
     }
 }
 
@@ -187,11 +191,11 @@ impl Spectral {
         }
     }
 
-    /// Multiplies the cached spectrum by `1/(1 + nu_dt L(k))` (skipped when `nu_dt == 0`) and, in
-    /// 3D, removes its divergence.
+    /// Multiplies the cached spectrum by `1/(1 + nu_dt |k|^2)` (skipped when `nu_dt == 0`) and,
+    /// in 3D, removes its divergence.
     fn filter_omega(&mut self, nu_dt: f64) {
         let ([_, ny, _], nxh) = self.fft.dims();
-        let [lx, ly, lz] = &self.tab.lap;
+        let [lx, ly, lz] = &self.tab.k2;
         let [kx, ky, kz] = &self.tab.kd;
         let diffuse = nu_dt != 0.0;
         match &mut self.omega_hat[..] {
@@ -242,10 +246,10 @@ impl Spectral {
     /// Diffusion and (3D) divergence cleaning of the vorticity, in place.
     ///
     /// `omega` has 1 component (2D, scalar) or 3 (3D), each `grid.len()` long. Every component
-    /// is forward-transformed and multiplied by `1/(1 + nu_dt L(k))`, where
-    /// `L(k) = sum_a (2 - 2 cos(k_a h)) / h^2` over the active axes is the symbol of minus the
-    /// classical 5/7-point Laplacian (so this is implicit Euler,
-    /// `(I - nu dt Lap_h) omega_new = omega`). In 3D the divergence is then removed,
+    /// is forward-transformed and multiplied by `1/(1 + nu_dt |k|^2)`, with the spectral
+    /// wavenumbers (Nyquist included): implicit Euler, `(I - nu dt Lap) omega_new = omega`, with
+    /// the periodic grid's spectral Laplacian, the operator the velocity solve inverts. In 3D
+    /// the divergence is then removed,
     /// `w_hat -= k (k . w_hat) / |k|^2`, with spectral `k` whose Nyquist components are 0
     /// (modes whose such `k` vanishes, among them `k = 0`, are untouched). The result is
     /// transformed back into `omega` and its spectrum stays cached as version `version`.
