@@ -122,7 +122,7 @@ impl FreeSurfaceScratch {
             .map(|&p| (1.0 - heaviside(p, eps)) as f32)
             .collect();
         self.in_wall = phi_s.iter().map(|&p| p > 0.0).collect();
-        let wrap = |i: usize, d: isize, n: usize| (i as isize + d).rem_euclid(n as isize) as usize;
+        let wrap = crate::base::grid::periodic_offset;
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {

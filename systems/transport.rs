@@ -30,7 +30,7 @@
 //! where it is (circulation is kept; the error is of the size of the cutoff).
 
 use crate::base::fields::{Fields, Params, SimTime};
-use crate::base::grid::{Grid, SyncPtr, component_ptrs};
+use crate::base::grid::{Grid, SyncPtr, component_ptrs, periodic_offset as wrap};
 use crate::base::kernels::{lambda42_weights, m4prime_weights};
 use crate::base::params::RemeshKernel;
 use bevy_ecs::prelude::*;
@@ -202,20 +202,15 @@ fn offsets() -> [isize; 2 * R] {
 /// the stack).
 const BLOCK: usize = 32;
 
-/// Periodic neighbour `i + d` on an axis of `n` nodes.
-#[inline(always)]
-fn wrap(i: usize, d: isize, n: usize) -> usize {
-    (i as isize + d).rem_euclid(n as isize) as usize
-}
-
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn stretch_row_avx2(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; R], dt: f64) {
     stretch_row(gu, w, c, dt);
 }
 
-/// The stretching of one row of nodes along x: the interior in one branch-free loop, the R
-/// nodes at each end with wrapped x neighbours.
+/// The stretching of one row of nodes along x: the interior in blocks of [`BLOCK`] nodes
+/// (branch-free loops over contiguous slices), the R nodes at each end one by one with
+/// wrapped x neighbours (`node`, the same sums in the same order).
 #[inline(always)]
 fn stretch_row(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; R], dt: f64) {
     let nx = w[0].len();

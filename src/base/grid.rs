@@ -130,6 +130,12 @@ pub fn component_ptrs(field: &mut [Vec<f64>]) -> [SyncPtr<f64>; 3] {
     })
 }
 
+/// The periodic neighbour `i + d` of index `i` on an axis of `n` nodes (any offset `d`).
+#[inline(always)]
+pub fn periodic_offset(i: usize, d: isize, n: usize) -> usize {
+    (i as isize + d).rem_euclid(n as isize) as usize
+}
+
 /// The periodic neighbours (i - 1, i + 1) of index `i` on an axis of `n` nodes.
 #[inline]
 pub fn periodic_neighbours(i: usize, n: usize) -> (usize, usize) {
