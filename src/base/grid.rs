@@ -144,19 +144,3 @@ pub fn periodic_neighbours(i: usize, n: usize) -> (usize, usize) {
         if i + 1 == n { 0 } else { i + 1 },
     )
 }
-
-#[cfg(test)]
-mod tests {
-    use super::Grid;
-
-    /// Nodes sit at origin + i h: a coordinate takes the nearest, wrapped into the box.
-    #[test]
-    fn nearest_node_wraps_periodically() {
-        let g = Grid::new([8, 4, 1], 0.5, [1.0, -1.0, 0.0]);
-        assert_eq!(g.nearest(0, 1.0 + 3.0 * 0.5 + 0.2), 3);
-        assert_eq!(g.nearest(0, 1.0 + 3.0 * 0.5 + 0.3), 4);
-        assert_eq!(g.nearest(0, 1.0 + 8.4 * 0.5), 0);
-        assert_eq!(g.nearest(0, 1.0 - 0.6 * 0.5), 7);
-        assert_eq!(g.nearest(1, -1.0 - 2.0 * 0.5), 2);
-    }
-}

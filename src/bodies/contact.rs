@@ -43,7 +43,7 @@ impl ContactParams {
 }
 
 /// The dimensionless factor C of the default κ = C L² a (see [`KappaDefault`]): 3 in 3D, 2 in
-/// 2D. Measured with a body dropped in vacuum on a flat floor (`tests/contact_units.rs` has
+/// 2D. Measured with a body dropped in vacuum on a flat floor (`tests/suite/contact_units.rs` has
 /// the scene): with a = |g| a body resting on the floor holds its weight at a gap of about
 /// ε/2 (3D: 0.43 ε at r = 3.2 ε, 0.51 ε at 16 ε, by quadrature of the continuous model; 2D:
 /// 0.48 ε at r = 5 ε, 1.07 ε at 32 ε, a disk's line contact growing stiffer as ε shrinks), and

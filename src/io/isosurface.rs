@@ -8,7 +8,7 @@
 //! interpolation along each edge), and every crossed grid edge gets the quad of the four cells
 //! around it, as two triangles. For a smooth level the vertices lie on it to second order in h
 //! (a vertex is within the sagitta of the cell's diagonal, about 3h²/(8R) for a radius of
-//! curvature R), and a plane is reproduced exactly. Measured (tests/free_surface_output.rs): a
+//! curvature R), and a plane is reproduced exactly. Measured (tests/suite/free_surface_output.rs): a
 //! sphere of radius 8.3 h has its vertices within 0.044 h of it and its area 0.9% short of
 //! 4πr²; a 128³ level (74,000 triangles) takes 0.05 s.
 //!

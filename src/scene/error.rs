@@ -38,8 +38,10 @@ impl std::error::Error for SceneError {}
 
 /// One step of a field path: a key or the index of a list entry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Seg {
+pub enum Seg {
+    /// A key of a struct or map.
     Key(&'static str),
+    /// The index of a list entry.
     Index(usize),
 }
 
@@ -220,7 +222,7 @@ fn is_ident(b: u8) -> bool {
 
 /// The line of the field at `path`, following keys and list entries; when part of the path
 /// is not written (a default), the line of the deepest part that is.
-pub(crate) fn locate(text: &str, path: &[Seg]) -> Option<usize> {
+pub fn locate(text: &str, path: &[Seg]) -> Option<usize> {
     let code = Code::new(text);
     let (mut from, mut to) = (0, text.len());
     let mut found = None;
@@ -247,7 +249,7 @@ pub(crate) fn locate(text: &str, path: &[Seg]) -> Option<usize> {
 }
 
 /// The byte offset of a 1-based line and column (in characters).
-pub(crate) fn offset_of(text: &str, line: usize, col: usize) -> usize {
+pub fn offset_of(text: &str, line: usize, col: usize) -> usize {
     let line_start: usize = text
         .split_inclusive('\n')
         .take(line.saturating_sub(1))
@@ -263,7 +265,7 @@ pub(crate) fn offset_of(text: &str, line: usize, col: usize) -> usize {
 
 /// The path of the field being written at byte `pos` of `text` (`numerics.end_time`,
 /// `initial[1].core_radius`), for errors the RON parser reports by position only.
-pub(crate) fn path_at(text: &str, pos: usize) -> Option<String> {
+pub fn path_at(text: &str, pos: usize) -> Option<String> {
     struct Frame {
         list: bool,
         key: Option<String>,
@@ -339,47 +341,4 @@ pub(crate) fn path_at(text: &str, pos: usize) -> Option<String> {
         }
     }
     (!path.is_empty()).then_some(path)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const TEXT: &str = r#"Scene(
-    // a comment with shape: in it
-    initial: [
-        LambOseen(center: [0.0, 0.0], circulation: 1.0, core_radius: 0.1),
-        LambOseen(center: [0.5, 0.0], circulation: "x",
-            core_radius: 0.1),
-    ],
-    numerics: (end_time: "0.01"),
-)"#;
-
-    #[test]
-    fn list_entries_are_located_by_index() {
-        use Seg::*;
-        let p = [Key("initial"), Index(1), Key("core_radius")];
-        assert_eq!(locate(TEXT, &p), Some(6));
-        let p = [Key("initial"), Index(0), Key("core_radius")];
-        assert_eq!(locate(TEXT, &p), Some(4));
-        let p = [Key("initial"), Index(1)];
-        assert_eq!(locate(TEXT, &p), Some(5));
-        // A key not written falls back to its entry.
-        let p = [Key("initial"), Index(1), Key("nothing")];
-        assert_eq!(locate(TEXT, &p), Some(5));
-    }
-
-    #[test]
-    fn position_names_the_field() {
-        let at = TEXT.find("\"x\"").unwrap();
-        assert_eq!(path_at(TEXT, at).as_deref(), Some("initial[1].circulation"));
-        let at = TEXT.find("\"0.01\"").unwrap();
-        assert_eq!(path_at(TEXT, at).as_deref(), Some("numerics.end_time"));
-    }
-
-    #[test]
-    fn offsets_count_characters() {
-        let text = "a\nκb: 1";
-        assert_eq!(&text[offset_of(text, 2, 2)..], "b: 1");
-    }
 }

@@ -166,10 +166,11 @@ pub(crate) struct Span {
 }
 
 /// The seeded random numbers of one generator.
-struct Draw(ChaCha8Rng);
+pub struct Draw(ChaCha8Rng);
 
 impl Draw {
-    fn new(seed: u64) -> Self {
+    /// The stream of `seed` (ChaCha8).
+    pub fn new(seed: u64) -> Self {
         Draw(ChaCha8Rng::seed_from_u64(seed))
     }
 
@@ -199,7 +200,7 @@ impl Draw {
 
 /// `count` indices into a list of `n`, each index `count / n` times (the first `count % n`
 /// once more), in a random order.
-fn shares(count: usize, n: usize, draw: &mut Draw) -> Vec<usize> {
+pub fn shares(count: usize, n: usize, draw: &mut Draw) -> Vec<usize> {
     let mut v: Vec<usize> = (0..count).map(|k| k % n).collect();
     draw.shuffle(&mut v);
     v
@@ -714,28 +715,4 @@ fn pack(
         made[k].0.position = ball.center.to_array()[..dim].to_vec();
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn values_parse_as_one_list_or_range() {
-        let p = |t: &str| ron::from_str::<Values>(t).unwrap();
-        assert_eq!(p("1.5"), Values::One(1.5));
-        assert_eq!(p("[0.5, 2.0]"), Values::List(vec![0.5, 2.0]));
-        assert_eq!(
-            p("(min: 0.5, max: 2.0)"),
-            Values::Range(Range { min: 0.5, max: 2.0 })
-        );
-    }
-
-    #[test]
-    fn shares_are_equal_and_shuffled() {
-        let mut d = Draw::new(3);
-        let v = shares(10, 3, &mut d);
-        let n = |k| v.iter().filter(|&&x| x == k).count();
-        assert_eq!((n(0), n(1), n(2)), (4, 3, 3));
-    }
 }

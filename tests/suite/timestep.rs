@@ -9,8 +9,7 @@ use tumble::run::{RunOptions, RunSummary, run_scene};
 use tumble::scene::Scene;
 use tumble::sim::engine::Simulation;
 
-mod common;
-use common::Scratch;
+use crate::common::Scratch;
 
 /// This file's scratch directories.
 fn scratch(test: &str) -> Scratch {

@@ -11,8 +11,7 @@ use tumble::io::output::{VtkField, read_vti, write_vti_compressed};
 use tumble::scene::Scene;
 use tumble::scene::format::Precision;
 
-mod common;
-use common::Scratch;
+use crate::common::Scratch;
 
 /// This file's scratch directories.
 fn scratch(test: &str) -> Scratch {

@@ -10,8 +10,7 @@ use tumble::io::output::{
     write_vti,
 };
 
-mod common;
-use common::Scratch;
+use crate::common::Scratch;
 
 /// This file's scratch directories.
 fn scratch(test: &str) -> Scratch {

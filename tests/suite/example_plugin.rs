@@ -4,7 +4,7 @@
 //! the generic serde state path.
 
 #[allow(dead_code)]
-#[path = "../examples/passive_scalar.rs"]
+#[path = "../../examples/passive_scalar.rs"]
 mod passive_scalar;
 
 use std::path::Path;

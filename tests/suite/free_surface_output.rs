@@ -340,8 +340,8 @@ fn series_csv_has_the_liquid_columns_only_with_a_free_surface() {
 }
 
 /// The cost at snapshot time of a 128³ free surface: its zero level and a slice image
-/// (measured, not asserted: `cargo test --release --test free_surface_output -- --ignored
-/// --nocapture`).
+/// (measured, not asserted: `cargo test --release --test suite -- --ignored --nocapture
+/// time_a_128_cubed_surface_and_slice`).
 #[test]
 #[ignore]
 fn time_a_128_cubed_surface_and_slice() {

@@ -4,6 +4,7 @@
 
 use std::collections::BTreeMap;
 use tumble::bodies::shapes::Shape;
+use tumble::scene::generate::{Draw, Range, Values, shares};
 use tumble::scene::{BodySpec, Scene, SceneError, ValidScene};
 
 /// A 3D scene in the unit box with one generator (`GEN` replaced by its text); the generator
@@ -365,4 +366,23 @@ fn check_memory_estimate_is_near_the_measured_peak() {
         est.bytes
     );
     assert!(est.seconds_per_step > 0.0 && est.patch_nodes > est.nodes);
+}
+
+#[test]
+fn values_parse_as_one_list_or_range() {
+    let p = |t: &str| ron::from_str::<Values>(t).unwrap();
+    assert_eq!(p("1.5"), Values::One(1.5));
+    assert_eq!(p("[0.5, 2.0]"), Values::List(vec![0.5, 2.0]));
+    assert_eq!(
+        p("(min: 0.5, max: 2.0)"),
+        Values::Range(Range { min: 0.5, max: 2.0 })
+    );
+}
+
+#[test]
+fn shares_are_equal_and_shuffled() {
+    let mut d = Draw::new(3);
+    let v = shares(10, 3, &mut d);
+    let n = |k| v.iter().filter(|&&x| x == k).count();
+    assert_eq!((n(0), n(1), n(2)), (4, 3, 3));
 }

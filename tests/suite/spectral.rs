@@ -702,7 +702,7 @@ fn no_allocation_after_new() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Timing (run with `cargo test --release --test spectral -- --ignored --nocapture`)
+// Timing (run with `cargo test --release --test suite -- --ignored --nocapture spectral::`)
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));

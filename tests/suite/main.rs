@@ -1,0 +1,32 @@
+//! The integration tests, one binary (one link instead of one per file; `hdf5.rs` and
+//! `checkpoint.rs` stay separate binaries, which the `hdf5` feature's run builds alone).
+//! Run one file's tests with `cargo test --release --test suite NAME::`.
+
+mod bodies;
+mod check_summary;
+mod cli;
+mod common;
+mod compressed;
+mod contact;
+mod contact_units;
+mod cup_mesh;
+mod determinism;
+mod example_plugin;
+mod free_surface_output;
+mod generators;
+mod kernels;
+mod layers;
+mod output;
+mod plot;
+mod readme;
+mod reports;
+mod scene_errors;
+mod scene_fuzz;
+mod scenes;
+mod schedule;
+mod shapes;
+mod spectral;
+mod stretching;
+mod surfaces;
+mod timestep;
+mod validation;
