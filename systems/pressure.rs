@@ -60,7 +60,7 @@
 //! on the thread count.
 
 use crate::base::fields::{Fields, Params, SimTime};
-use crate::base::grid::Grid;
+use crate::base::grid::{Grid, RowNeighbours, for_row};
 use crate::base::params::BodyCoupling;
 use crate::bodies::{Body, BodyFields, GridPatch, RigidState};
 use crate::solvers::Spectral;
@@ -142,61 +142,20 @@ impl PressureSolver {
     }
 }
 
-/// The periodic neighbours of the nodes of one row along x: the row's first node and the first
-/// nodes of the rows below and above it in y and z, so a node's neighbours cost two additions
-/// instead of a division and three wraps.
-#[derive(Clone, Copy)]
-struct RowNeighbours {
-    nx: usize,
-    c0: usize,
-    below: [usize; 2],
-    above: [usize; 2],
-}
-
-impl RowNeighbours {
-    /// The row `row = j + ny k` of `grid`.
-    #[inline]
-    fn new(grid: &Grid, row: usize) -> Self {
-        let [nx, ny, nz] = grid.n;
-        let (j, k) = (row % ny, row / ny);
-        let nb = crate::base::grid::periodic_neighbours;
-        let (jm, jp) = nb(j, ny);
-        let (km, kp) = if grid.dim == 3 { nb(k, nz) } else { (k, k) };
-        let start = |j: usize, k: usize| nx * (j + ny * k);
-        RowNeighbours {
-            nx,
-            c0: nx * row,
-            below: [start(jm, k), start(j, km)],
-            above: [start(jp, k), start(j, kp)],
-        }
-    }
-
-    /// Node `i` of the row and its neighbours (below, above) along each axis.
-    #[inline(always)]
-    fn at(&self, i: usize) -> (usize, [(usize, usize); 3]) {
-        let (im, ip) = if i > 0 && i + 1 < self.nx {
-            (i - 1, i + 1)
-        } else {
-            crate::base::grid::periodic_neighbours(i, self.nx)
-        };
-        (
-            self.c0 + i,
-            [
-                (self.c0 + im, self.c0 + ip),
-                (self.below[0] + i, self.above[0] + i),
-                (self.below[1] + i, self.above[1] + i),
-            ],
-        )
-    }
+/// The `nx` values of `f` from `at` (one row).
+#[inline(always)]
+fn line_at(f: &[f64], at: usize, nx: usize) -> &[f64] {
+    &f[at..at + nx]
 }
 
 /// The gravity force density on the face between nodes `lo` and `hi = lo + e_a`,
-/// (ρ_P g - G)_a, with ρ_P the mean of the two nodes' phase densities; times the face's β it
+/// (ρ_P g - G)_a, with ρ_P the mean of the two nodes' phase densities `phase` and `g`, `gg`
+/// the a-components of g and G; times the face's β it
 /// is an acceleration (the same β as the operator's, so a fluid whose density varies along g
 /// alone is exactly hydrostatic).
 #[inline]
-fn gravity_face(phase: &[f64], g: [f64; 3], gg: [f64; 3], a: usize, lo: usize, hi: usize) -> f64 {
-    0.5 * (phase[lo] + phase[hi]) * g[a] - gg[a]
+fn gravity_face(phase: [f64; 2], g: f64, gg: f64) -> f64 {
+    0.5 * (phase[0] + phase[1]) * g - gg
 }
 
 /// `out = A x` with A = -∇·(β∇) (compact stencil, periodic), times h², and x·Ax in the same
@@ -385,10 +344,14 @@ pub fn pressure(
         let beta = &mut solver.beta[a];
         beta.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
             let rn = RowNeighbours::new(&grid, row);
-            for (i, v) in o.iter_mut().enumerate() {
-                let (c, nbs) = rn.at(i);
-                let p = nbs[a].1;
-                *v = 2.0 / (rho[c] + rho[p]);
+            let rc = &rho[rn.c0..rn.c0 + nx];
+            if a == 0 {
+                for_row(nx, |i, _, ip| o[i] = 2.0 / (rc[i] + rc[ip]));
+            } else {
+                let up = &rho[rn.above[a - 1]..rn.above[a - 1] + nx];
+                for ((v, c), p) in o.iter_mut().zip(rc).zip(up) {
+                    *v = 2.0 / (c + p);
+                }
             }
         });
     }
@@ -405,18 +368,36 @@ pub fn pressure(
         let du = &bf.du;
         let inv2h = 0.5 / h;
         let src = crate::base::grid::component_ptrs(&mut solver.src);
+        let three = dim == 3;
         (0..grid.len() / nx).into_par_iter().for_each(|row| {
             let rn = RowNeighbours::new(&grid, row);
-            for i in 0..nx {
-                let (c, nbs) = rn.at(i);
-                for q in 0..dim {
+            let (u0, u1) = (line_at(&u[0], rn.c0, nx), line_at(&u[1], rn.c0, nx));
+            let u2 = if three { line_at(&u[2], rn.c0, nx) } else { u0 };
+            for q in 0..dim {
+                // SAFETY: the row belongs to this task only.
+                let out = unsafe { src[q].slice_mut(rn.c0, nx) };
+                let (uq, duq) = (line_at(&u[q], rn.c0, nx), line_at(&du[q], rn.c0, nx));
+                let (ym, yp) = (
+                    line_at(&u[q], rn.below[0], nx),
+                    line_at(&u[q], rn.above[0], nx),
+                );
+                let (zm, zp) = if three {
+                    (
+                        line_at(&u[q], rn.below[1], nx),
+                        line_at(&u[q], rn.above[1], nx),
+                    )
+                } else {
+                    (uq, uq)
+                };
+                for_row(nx, |i, im, ip| {
                     let mut adv = 0.0;
-                    for (b, &(m, p)) in nbs.iter().enumerate().take(dim) {
-                        adv += u[b][c] * (u[q][p] - u[q][m]) * inv2h;
+                    adv += u0[i] * (uq[ip] - uq[im]) * inv2h;
+                    adv += u1[i] * (yp[i] - ym[i]) * inv2h;
+                    if three {
+                        adv += u2[i] * (zp[i] - zm[i]) * inv2h;
                     }
-                    // SAFETY: node c belongs to this row only.
-                    unsafe { src[q].write(c, du[q][c] - dt * adv) };
-                }
+                    out[i] = duq[i] - dt * adv;
+                });
             }
         });
     }
@@ -430,18 +411,41 @@ pub fn pressure(
             .enumerate()
             .for_each(|(row, o)| {
                 let rn = RowNeighbours::new(&grid, row);
-                for (i, v) in o.iter_mut().enumerate() {
-                    let (c, nbs) = rn.at(i);
+                // The face between lo and hi = lo + e_a, from the values at both nodes and β
+                // on it.
+                let face = |a: usize, s: [f64; 2], ph: [f64; 2], b: f64| {
+                    0.5 * (s[0] + s[1]) + dt * gravity_face(ph, g[a], gg[a]) * b
+                };
+                let ph = line_at(phase, rn.c0, nx);
+                let (s0, b0) = (line_at(&src[0], rn.c0, nx), line_at(&beta[0], rn.c0, nx));
+                // Per axis 1 and 2: the source, phase and β rows of this row and of the rows
+                // below and above it.
+                let rows = |a: usize| {
+                    let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
+                    (
+                        [
+                            line_at(&src[a], m, nx),
+                            line_at(&src[a], rn.c0, nx),
+                            line_at(&src[a], p, nx),
+                        ],
+                        [line_at(phase, m, nx), line_at(phase, p, nx)],
+                        [line_at(&beta[a], m, nx), line_at(&beta[a], rn.c0, nx)],
+                    )
+                };
+                let (s1, p1, b1) = rows(1);
+                let (s2, p2, b2) = if dim == 3 { rows(2) } else { (s1, p1, b1) };
+                for_row(nx, |i, im, ip| {
                     let mut div = 0.0;
-                    for (a, &(m, p)) in nbs.iter().enumerate().take(dim) {
-                        let face = |lo: usize, hi: usize| {
-                            0.5 * (src[a][lo] + src[a][hi])
-                                + dt * gravity_face(phase, g, gg, a, lo, hi) * beta[a][lo]
-                        };
-                        div += face(c, p) - face(m, c);
+                    div += face(0, [s0[i], s0[ip]], [ph[i], ph[ip]], b0[i])
+                        - face(0, [s0[im], s0[i]], [ph[im], ph[i]], b0[im]);
+                    div += face(1, [s1[1][i], s1[2][i]], [ph[i], p1[1][i]], b1[1][i])
+                        - face(1, [s1[0][i], s1[1][i]], [p1[0][i], ph[i]], b1[0][i]);
+                    if dim == 3 {
+                        div += face(2, [s2[1][i], s2[2][i]], [ph[i], p2[1][i]], b2[1][i])
+                            - face(2, [s2[0][i], s2[1][i]], [p2[0][i], ph[i]], b2[0][i]);
                     }
-                    *v = -h * div;
-                }
+                    o[i] = -h * div;
+                });
             });
     }
     let (it, res) = solve(&grid, solver, &mut state.phi, &mut spectral);
@@ -463,18 +467,38 @@ pub fn pressure(
         let inv_h = 1.0 / h;
         (0..grid.len() / nx).into_par_iter().for_each(|row| {
             let rn = RowNeighbours::new(&grid, row);
-            for i in 0..nx {
-                let (c, nbs) = rn.at(i);
-                for (a, &(m, p)) in nbs.iter().enumerate().take(dim) {
-                    let face = |lo: usize, hi: usize| {
-                        (dt * gravity_face(phase, g, gg, a, lo, hi) - (phi[hi] - phi[lo]) * inv_h)
-                            * beta[a][lo]
-                    };
-                    let corr = 0.5 * (face(m, c) + face(c, p));
-                    // SAFETY: node c belongs to this row only.
-                    unsafe {
-                        du[a].write(c, du[a].read(c) + corr);
-                        trial[a].write(c, u[a][c] + corr);
+            // The face between lo and hi = lo + e_a, from the phase density and φ at both
+            // nodes and β on it.
+            let face = |a: usize, ph: [f64; 2], f: [f64; 2], b: f64| {
+                (dt * gravity_face(ph, g[a], gg[a]) - (f[1] - f[0]) * inv_h) * b
+            };
+            let (ph, fc) = (line_at(phase, rn.c0, nx), line_at(phi, rn.c0, nx));
+            for a in 0..dim {
+                let (ua, bc) = (line_at(&u[a], rn.c0, nx), line_at(&beta[a], rn.c0, nx));
+                // SAFETY: the row belongs to this task only.
+                let (du_a, tr_a) =
+                    unsafe { (du[a].slice_mut(rn.c0, nx), trial[a].slice_mut(rn.c0, nx)) };
+                let mut out = |i: usize, corr: f64| {
+                    du_a[i] += corr;
+                    tr_a[i] = ua[i] + corr;
+                };
+                if a == 0 {
+                    for_row(nx, |i, im, ip| {
+                        let corr = 0.5
+                            * (face(0, [ph[im], ph[i]], [fc[im], fc[i]], bc[im])
+                                + face(0, [ph[i], ph[ip]], [fc[i], fc[ip]], bc[i]));
+                        out(i, corr);
+                    });
+                } else {
+                    let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
+                    let (phm, php) = (line_at(phase, m, nx), line_at(phase, p, nx));
+                    let (fm, fp) = (line_at(phi, m, nx), line_at(phi, p, nx));
+                    let bm = line_at(&beta[a], m, nx);
+                    for i in 0..nx {
+                        let corr = 0.5
+                            * (face(a, [phm[i], ph[i]], [fm[i], fc[i]], bm[i])
+                                + face(a, [ph[i], php[i]], [fc[i], fp[i]], bc[i]));
+                        out(i, corr);
                     }
                 }
             }
