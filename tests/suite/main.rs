@@ -1,5 +1,6 @@
-//! The integration tests, one binary (one link instead of one per file; `hdf5.rs` and
-//! `checkpoint.rs` stay separate binaries, which the `hdf5` feature's run builds alone).
+//! The integration tests, one binary (one link instead of one per file). Separate binaries:
+//! `hdf5.rs` and `checkpoint.rs` (the `hdf5` feature's run builds them alone) and `alloc.rs`
+//! (its counting allocator wraps the whole process).
 //! Run one file's tests with `cargo test --release --test suite NAME::`.
 
 mod bodies;
