@@ -54,10 +54,18 @@
 //!
 //! Solver: conjugate gradients on -∇·(β∇), preconditioned by the inverse of the
 //! constant-coefficient 5/7-point Laplacian (one real FFT pair, exact when ρ is uniform) and
-//! warm-started from the last step's φ, to a relative residual of 1e-9. Iterations measured
-//! (3D, 32³, a sphere): 2 at density ratio 1.1, 6 at 2, 11 at 5, 36 at 0.01, about 146 at
-//! 1000. Dot products are summed row by row in a fixed order, so the result does not depend
-//! on the thread count.
+//! warm-started from the last step's φ, to a relative residual of 1e-7. Iterations measured
+//! at 1e-9 (3D, 32³, a sphere): 2 at density ratio 1.1, 6 at 2, 11 at 5, 36 at 0.01, about
+//! 146 at 1000; at 1e-7 against 1e-9: dkt (60x60x240) 5 against 7, the tank of 100 bodies
+//! under a free surface at 1:100 (64³) 100 against 137. The quick tier gives the same numbers
+//! at 1e-7 as at 1e-9 to the printed seven digits in 87 of 90 rows, the other three (floating
+//! bodies) within 2e-6 of their value; at 1e-6 a floating box's draft moved by 6% and the
+//! waterline by 0.07 h. (A free surface's right-hand side is mostly the hydrostatic balance,
+//! so the residual relative to it must stay small to resolve the dynamic part.) The
+//! warm start's residual is 0.3 to 1.3 of the right-hand side's (the penalization's increment
+//! changes from step to step); extrapolating φ from the last two steps did not reduce the
+//! iterations (dkt 7 and 7, the tank 137 and 139). Dot products are summed row by row in a
+//! fixed order, so the result does not depend on the thread count.
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, RowNeighbours, for_row};
@@ -70,7 +78,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// Relative residual at which the pressure solve stops.
-pub const TOLERANCE: f64 = 1e-9;
+pub const TOLERANCE: f64 = 1e-7;
 /// Iteration cap of the pressure solve (a warning is logged if it is reached).
 pub const MAX_ITERATIONS: usize = 2000;
 
