@@ -183,7 +183,7 @@ fn apply<'a>(
         .enumerate()
         .for_each(|(row, (o, xax))| {
             let rn = RowNeighbours::new(grid, row);
-            let line = |f: &'a [f64], at: usize| -> &'a [f64] { &f[at..at + nx] };
+            let line = |f: &'a [f64], at: usize| line_at(f, at, nx);
             let (xc, bx) = (line(x, rn.c0), line(&beta[0], rn.c0));
             let (ym, yp) = (line(x, rn.below[0]), line(x, rn.above[0]));
             let (by, bym) = (line(&beta[1], rn.c0), line(&beta[1], rn.below[0]));
@@ -207,13 +207,7 @@ fn apply<'a>(
                 }
                 s
             };
-            for i in 1..nx.saturating_sub(1) {
-                o[i] = node(i, i - 1, i + 1);
-            }
-            for i in [0, nx - 1] {
-                let (im, ip) = crate::base::grid::periodic_neighbours(i, nx);
-                o[i] = node(i, im, ip);
-            }
+            for_row(nx, |i, im, ip| o[i] = node(i, im, ip));
             *xax = xc.iter().zip(o.iter()).map(|(x, y)| x * y).sum();
         });
     partial.iter().sum()

@@ -7,6 +7,12 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use tumble::base::grid::Grid;
+
+// The suite's shared helpers (`Rng`); this binary uses only part of them.
+#[allow(dead_code)]
+#[path = "suite/common.rs"]
+mod common;
+use common::Rng;
 use tumble::solvers::fft::C64;
 use tumble::solvers::operators::Spectral;
 
@@ -47,24 +53,6 @@ unsafe impl GlobalAlloc for Counting {
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
-
-/// Deterministic pseudo-random numbers in [-1, 1) (splitmix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-
-    fn field(&mut self, len: usize) -> Vec<f64> {
-        (0..len).map(|_| self.next()).collect()
-    }
-}
 
 #[test]
 fn no_allocation_after_new() {

@@ -150,8 +150,6 @@ pub fn periodic_offset(i: usize, d: isize, n: usize) -> usize {
 /// instead of a division and three wraps.
 #[derive(Clone, Copy)]
 pub struct RowNeighbours {
-    /// Nodes per row.
-    pub nx: usize,
     /// The row's first node.
     pub c0: usize,
     /// The first nodes of the rows below it in y and in z (itself in z in 2D).
@@ -171,29 +169,10 @@ impl RowNeighbours {
         let (km, kp) = if grid.dim == 3 { nb(k, nz) } else { (k, k) };
         let start = |j: usize, k: usize| nx * (j + ny * k);
         RowNeighbours {
-            nx,
             c0: nx * row,
             below: [start(jm, k), start(j, km)],
             above: [start(jp, k), start(j, kp)],
         }
-    }
-
-    /// Node `i` of the row and its neighbours (below, above) along each axis.
-    #[inline(always)]
-    pub fn at(&self, i: usize) -> (usize, [(usize, usize); 3]) {
-        let (im, ip) = if i > 0 && i + 1 < self.nx {
-            (i - 1, i + 1)
-        } else {
-            periodic_neighbours(i, self.nx)
-        };
-        (
-            self.c0 + i,
-            [
-                (self.c0 + im, self.c0 + ip),
-                (self.below[0] + i, self.above[0] + i),
-                (self.below[1] + i, self.above[1] + i),
-            ],
-        )
     }
 }
 

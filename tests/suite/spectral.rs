@@ -3,30 +3,13 @@
 use std::f64::consts::PI;
 use std::time::Instant;
 
+use crate::common::Rng;
 use tumble::base::grid::Grid;
 use tumble::solvers::fft::*;
 use tumble::solvers::operators::*;
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
-
-/// Deterministic pseudo-random numbers in [-1, 1) (splitmix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-
-    fn field(&mut self, len: usize) -> Vec<f64> {
-        (0..len).map(|_| self.next()).collect()
-    }
-}
 
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
