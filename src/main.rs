@@ -523,6 +523,7 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
     let mut per: Vec<(&'static str, Vec<f64>)> = Vec::new();
     // Iterations of the variable-density pressure solve per timed step (when it runs).
     let mut iterations = Vec::new();
+    let mut preconditioners = Vec::new();
     for _ in 0..steps {
         let t0 = std::time::Instant::now();
         sim.step()?;
@@ -531,7 +532,11 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
             .world
             .get_resource::<tumble::systems::pressure::PressureSolver>()
         {
-            iterations.push(p.iterations as f64);
+            iterations.push(p.iterations() as f64);
+            let name = format!("{:?}", p.poisson.preconditioner).to_lowercase();
+            if !preconditioners.contains(&name) {
+                preconditioners.push(name);
+            }
         }
         for &(n, s) in &sim.timings().last {
             match per.iter_mut().find(|e| e.0 == n) {
@@ -574,6 +579,7 @@ fn bench(scene: ValidScene, steps: usize, warmup: usize) -> anyhow::Result<Strin
     });
     if !iterations.is_empty() {
         line["median_pressure_iterations"] = serde_json::json!(median_p90(&mut iterations).0);
+        line["pressure_preconditioners"] = serde_json::json!(preconditioners);
     }
     Ok(line.to_string())
 }

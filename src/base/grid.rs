@@ -200,3 +200,9 @@ pub fn periodic_neighbours(i: usize, n: usize) -> (usize, usize) {
         if i + 1 == n { 0 } else { i + 1 },
     )
 }
+
+/// The `nx` values of `f` from `at` (one row).
+#[inline(always)]
+pub fn line_at(f: &[f64], at: usize, nx: usize) -> &[f64] {
+    &f[at..at + nx]
+}

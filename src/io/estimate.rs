@@ -5,7 +5,8 @@
 //! previous velocity (`Fields`; transport makes the carrying velocity in the last), with bodies the
 //! density, fluid-phase density, Σχ, union φ, penalization increment and owner
 //! (`BodyFields`), with the `Pressure` coupling the face coefficients, source, trial velocity,
-//! conjugate-gradient vectors and φ (`PressureSolver`, `PressureState`), and with a flow the
+//! conjugate-gradient vectors and φ (`PressureSolver`, `PressureState`) and where the densities
+//! differ enough the multigrid hierarchy (`solvers::multigrid`), and with a flow the
 //! vorticity spectrum and a work spectrum (`Spectral`); per body, its local level set (its
 //! bounding box grown by the band, sampled at h) and its grid patch (φ and χ over the world box
 //! its rotated bounds and band cover; the whole grid for a wall); plus the process's own
@@ -88,6 +89,25 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
     }
     if pressure {
         per_node += 3.0 * d + 4.0 + 1.0; // β, src, trial; r, z, p, ap; PressureState φ
+        // The multigrid hierarchy where the densities can differ by its contrast: four weights
+        // per node on every level, and each coarse level's right-hand side and correction
+        // (a level has 2^-dim of the nodes of the one above it).
+        let fluid = scene.fluid.density;
+        let mut densities = vec![fluid];
+        if let Some(fs) = &scene.free_surface {
+            densities.push(fs.gas_density);
+        }
+        for b in &scene.bodies {
+            if b.kind != crate::bodies::BodyKind::Static {
+                densities.push(b.density.unwrap_or(fluid));
+            }
+        }
+        let lo = densities.iter().fold(f64::INFINITY, |m, v| m.min(*v));
+        let hi = densities.iter().fold(0.0f64, |m, v| m.max(*v));
+        if hi >= crate::solvers::variable_poisson::MULTIGRID_CONTRAST * lo {
+            let levels = 2f64.powf(d) / (2f64.powf(d) - 1.0);
+            per_node += 4.0 * levels + 2.0 * (levels - 1.0);
+        }
     }
     if flow {
         // Spectral: ω̂ per component and a work buffer, (nx/2 + 1) complex per nx reals.

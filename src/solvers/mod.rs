@@ -3,6 +3,8 @@
 //! cleaning). Depends only on [`crate::base`].
 
 pub mod fft;
+pub mod multigrid;
 pub mod operators;
+pub mod variable_poisson;
 
 pub use operators::Spectral;

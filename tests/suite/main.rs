@@ -17,6 +17,7 @@ mod free_surface_output;
 mod generators;
 mod kernels;
 mod layers;
+mod multigrid;
 mod output;
 mod plot;
 mod readme;
