@@ -256,13 +256,34 @@ unsafe fn red_black_plane(lv: &Level, xp: SyncPtr<f64>, b: &[f64], colour: usize
     } else {
         plane..plane + 1
     };
+    let (x, w, b) = (xp.0, lv.w.as_ptr(), b.as_ptr());
     for row in rows {
         let rn = RowNeighbours::new(g, row);
-        let (j, k) = (row % ny, row / ny);
-        for i in ((colour + j + k) % 2..nx).step_by(2) {
-            let s = neighbour_sum(&lv.w, &rn, three, i, nx, |m| unsafe { xp.read(m) });
-            let c = rn.c0 + i;
-            unsafe { xp.write(c, (b[c] + s) * lv.w[c][3]) };
+        let (c0, [ym, zm], [yp, zp]) = (rn.c0, rn.below, rn.above);
+        // SAFETY: every index is a node of this level (the row and its neighbour rows), and
+        // the caller guarantees no other task touches the nodes read or written here.
+        let node = |i: usize, im: usize, ip: usize| unsafe {
+            let c = c0 + i;
+            let wc = *w.add(c);
+            let mut s = wc[0] * *x.add(c0 + ip) + (*w.add(c0 + im))[0] * *x.add(c0 + im);
+            s += wc[1] * *x.add(yp + i) + (*w.add(ym + i))[1] * *x.add(ym + i);
+            if three {
+                s += wc[2] * *x.add(zp + i) + (*w.add(zm + i))[2] * *x.add(zm + i);
+            }
+            *x.add(c) = (*b.add(c) + s) * wc[3];
+        };
+        // The row's nodes of this colour: the first and last with the periodic wrap.
+        let mut i = (colour + row % ny + row / ny) % 2;
+        if i == 0 {
+            node(0, nx - 1, 1 % nx);
+            i = 2;
+        }
+        while i + 1 < nx {
+            node(i, i - 1, i + 1);
+            i += 2;
+        }
+        if i + 1 == nx {
+            node(i, i - 1, 0);
         }
     }
 }
@@ -335,28 +356,33 @@ fn restrict_residual(lv: &mut Level, x: &[f64], b: &[f64]) {
             for k in ck * f[2]..(ck + 1) * f[2] {
                 for j in cj * f[1]..(cj + 1) * f[1] {
                     let rn = RowNeighbours::new(g, j + g.n[1] * k);
+                    let (c0, [ym, zm], [yp, zp]) = (rn.c0, rn.below, rn.above);
+                    let row = |at: usize| &x[at..at + nx];
+                    let (xc, xym, xyp) = (row(c0), row(ym), row(yp));
+                    let (xzm, xzp) = if three { (row(zm), row(zp)) } else { (xc, xc) };
+                    let (wc, wym) = (&w[c0..c0 + nx], &w[ym..ym + nx]);
+                    let wzm = if three { &w[zm..zm + nx] } else { wc };
+                    let bc = &b[c0..c0 + nx];
+                    let (mut ci, mut count) = (0, 0);
                     for i in 0..nx {
-                        let c = rn.c0 + i;
-                        let s = neighbour_sum(w, &rn, three, i, nx, |m| x[m]);
-                        let d = node_diagonal(w, &rn, three, i, nx);
-                        o[i / f[0]] += b[c] - (d * x[c] - s);
+                        let im = if i == 0 { nx - 1 } else { i - 1 };
+                        let ip = if i + 1 == nx { 0 } else { i + 1 };
+                        let (wi, wm) = (wc[i], wc[im][0]);
+                        let mut ax = wi[0] * (xc[i] - xc[ip]) + wm * (xc[i] - xc[im]);
+                        ax += wi[1] * (xc[i] - xyp[i]) + wym[i][1] * (xc[i] - xym[i]);
+                        if three {
+                            ax += wi[2] * (xc[i] - xzp[i]) + wzm[i][2] * (xc[i] - xzm[i]);
+                        }
+                        o[ci] += bc[i] - ax;
+                        count += 1;
+                        if count == f[0] {
+                            count = 0;
+                            ci += 1;
+                        }
                     }
                 }
             }
         });
-}
-
-/// The sum of a node's face coefficients (the operator's diagonal), in double precision.
-#[inline(always)]
-fn node_diagonal(w: &[Weights], rn: &RowNeighbours, three: bool, i: usize, nx: usize) -> f64 {
-    let im = if i == 0 { nx - 1 } else { i - 1 };
-    let c = rn.c0 + i;
-    let mut d = w[c][0] + w[rn.c0 + im][0];
-    d += w[c][1] + w[rn.below[0] + i][1];
-    if three {
-        d += w[c][2] + w[rn.below[1] + i][2];
-    }
-    d
 }
 
 /// x += the coarse correction copied to every node of its block (prolongation).
