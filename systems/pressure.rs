@@ -80,7 +80,7 @@ use crate::bodies::free_surface::FreeSurface;
 use crate::bodies::{Body, BodyFields, GridPatch, Material, RigidState};
 use crate::solvers::Spectral;
 use crate::solvers::variable_poisson::{MAX_ITERATIONS, MULTIGRID_CONTRAST, VariablePoisson};
-use crate::systems::rigid_velocity::{BodySums, integrate, penalized_weight};
+use crate::systems::rigid_velocity::{BodySums, integrate_n, penalized_weight};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -355,11 +355,19 @@ pub fn pressure(
             state.excess.resize(body.id + 1, None);
         }
         let (rho, phase) = (&bf.rho, &bf.rho_phase);
-        let part = |sign: f64, sums: &mut BodySums| {
-            let (m, _, p, l, _) =
-                integrate(&grid, patch, st.center, &solver.trial, sums, |c, _, g| {
-                    (sign * (rho[g] - phase[g])).max(0.0) * penalized_weight(ldt, c)
-                });
+        // Both signs of ρ - ρ_P in one pass over the patch.
+        let sides = integrate_n::<2>(
+            &grid,
+            patch,
+            st.center,
+            &solver.trial,
+            &mut sums,
+            |c, _, g| {
+                let w = penalized_weight(ldt, c);
+                [1.0, -1.0].map(|sign: f64| (sign * (rho[g] - phase[g])).max(0.0) * w)
+            },
+        );
+        state.excess[body.id] = Some(sides.map(|(m, _, p, l, _)| {
             if m != 0.0 {
                 ExcessMomentum {
                     velocity: p / m,
@@ -368,8 +376,7 @@ pub fn pressure(
             } else {
                 ExcessMomentum::default()
             }
-        };
-        state.excess[body.id] = Some([part(1.0, &mut sums), part(-1.0, &mut sums)]);
+        }));
     }
 }
 

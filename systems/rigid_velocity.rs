@@ -52,10 +52,10 @@ impl BodySums {
         &mut self.rows
     }
 
-    /// Room for the largest patch of `grid` (ny nz rows).
+    /// Room for the largest patch of `grid` (ny nz rows), [`MAX_WEIGHTS`] weights a row.
     pub fn new(grid: &Grid) -> Self {
         BodySums {
-            rows: vec![[0.0; 16]; grid.n[1] * grid.n[2]],
+            rows: vec![[0.0; 16]; MAX_WEIGHTS * grid.n[1] * grid.n[2]],
         }
     }
 }
@@ -68,6 +68,13 @@ pub fn penalized_weight(ldt: f64, chi: f64) -> f64 {
     ldt * chi / (1.0 + ldt * chi)
 }
 
+/// The integrals of one weight over a patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
+/// measured from the centroid.
+pub type Moments = (f64, DVec3, DVec3, DVec3, DMat3);
+
+/// The most weights [`integrate_n`] takes in one pass.
+pub const MAX_WEIGHTS: usize = 5;
+
 /// Integrals of a weight χ over a body's patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
 /// measured from the centroid; all zero when ∫χ is.
 pub fn integrate(
@@ -77,56 +84,87 @@ pub fn integrate(
     u: &[Vec<f64>],
     sums: &mut BodySums,
     weight: impl Fn(f64, f64, usize) -> f64 + Sync,
-) -> (f64, DVec3, DVec3, DVec3, DMat3) {
+) -> Moments {
+    integrate_n::<1>(grid, patch, center, u, sums, |c, p, g| [weight(c, p, g)])[0]
+}
+
+/// The integrals of `N` weights (at most [`MAX_WEIGHTS`]) in one pass over the patch, each
+/// as [`integrate`] would give it alone (the same sums in the same order, bit for bit).
+pub fn integrate_n<const N: usize>(
+    grid: &Grid,
+    patch: &GridPatch,
+    center: DVec3,
+    u: &[Vec<f64>],
+    sums: &mut BodySums,
+    weight: impl Fn(f64, f64, usize) -> [f64; N] + Sync,
+) -> [Moments; N] {
+    const ZERO: [f64; 16] = [0.0; 16];
     let [dx, dy, _] = patch.dims;
+    let empty = (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
     if patch.is_empty() {
-        return (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
+        return [empty; N];
     }
     let rows = patch.len() / dx;
     let dv = grid.cell_volume();
     let dim = grid.dim;
-    sums.rows[..rows]
-        .par_iter_mut()
+    assert!(
+        N <= MAX_WEIGHTS,
+        "integrate_n: at most {MAX_WEIGHTS} weights"
+    );
+    sums.rows[..N * rows]
+        .par_chunks_mut(N)
         .enumerate()
         .for_each(|(r, acc)| {
             let (b, c) = (r % dy, r / dy);
-            let mut s = [0.0; 16];
+            let mut s = [ZERO; N];
             for a in 0..dx {
                 let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
                 let g = grid.idx(i, j, k);
-                let chi = weight(patch.chi[r * dx + a], patch.phi[r * dx + a], g);
-                if chi == 0.0 {
+                let w = weight(patch.chi[r * dx + a], patch.phi[r * dx + a], g);
+                if w.iter().all(|&chi| chi == 0.0) {
                     continue;
                 }
                 let p = grid.pos(i, j, k);
                 let rv = DVec3::new(p[0], p[1], p[2]) - center;
                 let uv = DVec3::new(u[0][g], u[1][g], if dim == 3 { u[2][g] } else { 0.0 });
                 let m = rv.cross(uv);
-                s[0] += chi;
-                s[1] += chi * uv.x;
-                s[2] += chi * uv.y;
-                s[3] += chi * uv.z;
-                s[4] += chi * m.x;
-                s[5] += chi * m.y;
-                s[6] += chi * m.z;
-                s[7] += chi * rv.x * rv.x;
-                s[8] += chi * rv.y * rv.y;
-                s[9] += chi * rv.z * rv.z;
-                s[10] += chi * rv.x * rv.y;
-                s[11] += chi * rv.x * rv.z;
-                s[12] += chi * rv.y * rv.z;
-                s[13] += chi * rv.x;
-                s[14] += chi * rv.y;
-                s[15] += chi * rv.z;
+                for (s, &chi) in s.iter_mut().zip(&w) {
+                    if chi == 0.0 {
+                        continue;
+                    }
+                    s[0] += chi;
+                    s[1] += chi * uv.x;
+                    s[2] += chi * uv.y;
+                    s[3] += chi * uv.z;
+                    s[4] += chi * m.x;
+                    s[5] += chi * m.y;
+                    s[6] += chi * m.z;
+                    s[7] += chi * rv.x * rv.x;
+                    s[8] += chi * rv.y * rv.y;
+                    s[9] += chi * rv.z * rv.z;
+                    s[10] += chi * rv.x * rv.y;
+                    s[11] += chi * rv.x * rv.z;
+                    s[12] += chi * rv.y * rv.z;
+                    s[13] += chi * rv.x;
+                    s[14] += chi * rv.y;
+                    s[15] += chi * rv.z;
+                }
             }
-            *acc = s;
+            acc.copy_from_slice(&s);
         });
-    let mut t = [0.0; 16];
-    for s in &sums.rows[..rows] {
-        for q in 0..16 {
-            t[q] += s[q];
+    std::array::from_fn(|q| {
+        let mut t = [0.0; 16];
+        for s in sums.rows[..N * rows].chunks(N) {
+            for (t, v) in t.iter_mut().zip(&s[q]) {
+                *t += v;
+            }
         }
-    }
+        moments(center, dv, t).unwrap_or(empty)
+    })
+}
+
+/// The moments from the weight's sums `t` (before the cell volume `dv`); `None` when ∫χ is 0.
+fn moments(center: DVec3, dv: f64, mut t: [f64; 16]) -> Option<Moments> {
     for v in &mut t {
         *v *= dv;
     }
@@ -134,7 +172,7 @@ pub fn integrate(
     // (A weight may be negative: the mass of a body lighter than the fluid beyond the
     // fluid's.)
     if vol == 0.0 {
-        return (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
+        return None;
     }
     // Shift the moments from the centre c to the centroid x_G = c + d.
     let d = DVec3::new(t[13], t[14], t[15]) / vol;
@@ -155,7 +193,7 @@ pub fn integrate(
         DVec3::new(-xy, xx + zz, -yz),
         DVec3::new(-xz, -yz, xx + yy),
     );
-    (vol, center + d, mom, ang, j)
+    Some((vol, center + d, mom, ang, j))
 }
 
 /// Volume, centroid and inertia of a moving body from χ (the body the density field
@@ -215,7 +253,8 @@ pub fn rigid_velocity(
             continue;
         }
         let (v_prev, w_prev, j_prev) = (state.velocity, state.angular_velocity, state.inertia);
-        if !mass_properties(&grid, patch, &fields.u, &mut sums, body, time.t, &mut state) {
+        if kinematic_velocity(&body.kind, time.t).is_some() {
+            mass_properties(&grid, patch, &fields.u, &mut sums, body, time.t, &mut state);
             continue;
         }
         // The rigid velocity is the mean over exactly the weights the implicit penalization
@@ -224,37 +263,54 @@ pub fn rigid_velocity(
         // small but λΔtχ ≫ 1, is dragged along at ū every step: momentum from nothing that
         // made a settling sphere fall ~50% too fast.)
         let ldt = params.lambda * time.dt;
-        // Under the pressure projection the flow carries each region with its own density,
-        // so the rigid velocity is the density-weighted mean (the penalization then conserves
-        // momentum).
         let weight = |c: f64| penalized_weight(ldt, c);
-        let (wvol, wcentroid, mut mom, mut ang, wj) = integrate(
+        let parts = excess.and_then(|x| x.get(body.id).copied().flatten());
+        // All of the body's integrals in one pass over its patch:
+        // - χ: its volume, centroid and inertia (`mass_properties`);
+        // - w: under the pressure projection the flow carries each region with its own
+        //   density, so the rigid velocity is the density-weighted mean (the penalization then
+        //   conserves momentum);
+        // - the excess mass's share, each sign of ρ - ρ_P apart (see `PressureState::excess`):
+        //   its momentum from the last projection replaces the flow's now, ∫(ρ - ρ_P) w u
+        //   (angular momenta about the centroid of ρw);
+        // - ρ_P χ: the fluid mass the body displaces.
+        let [geo, main, above, below, displaced] = integrate_n::<5>(
             &grid,
             patch,
             state.center,
             &fields.u,
             &mut sums,
             |c, _, g| {
-                if pressure {
-                    rho[g] * weight(c)
-                } else {
-                    weight(c)
-                }
+                let excess = |sign: f64| {
+                    if parts.is_some() {
+                        sign * (sign * (rho[g] - phase[g])).max(0.0) * weight(c)
+                    } else {
+                        0.0
+                    }
+                };
+                [
+                    c,
+                    if pressure {
+                        rho[g] * weight(c)
+                    } else {
+                        weight(c)
+                    },
+                    excess(1.0),
+                    excess(-1.0),
+                    if pressure { phase[g] * c } else { 0.0 },
+                ]
             },
         );
-        // The excess mass's share: its momentum from the last projection in place of the
-        // flow's now, ∫(ρ - ρ_P) w u (angular momenta about the centroid of ρw).
-        // Each sign of ρ - ρ_P apart (see `PressureState::excess`).
-        if let Some(Some(parts)) = excess.map(|x| x.get(body.id).copied().flatten()) {
-            for (e, sign) in parts.iter().zip([1.0, -1.0]) {
-                let (me, xe, pu, lu, _) = integrate(
-                    &grid,
-                    patch,
-                    state.center,
-                    &fields.u,
-                    &mut sums,
-                    |c, _, g| sign * (sign * (rho[g] - phase[g])).max(0.0) * weight(c),
-                );
+        state.volume = geo.0;
+        state.centroid = geo.1;
+        state.inertia = geo.4;
+        let has_volume = geo.0 > 0.0;
+        if !has_volume {
+            continue;
+        }
+        let (wvol, wcentroid, mut mom, mut ang, wj) = main;
+        if let Some(parts) = parts {
+            for (e, (me, xe, pu, lu, _)) in parts.iter().zip([above, below]) {
                 if me != 0.0 {
                     let pe = me * e.velocity;
                     let arm = xe - wcentroid;
@@ -275,16 +331,7 @@ pub fn rigid_velocity(
         // Under the pressure projection, this step's impulse of the body's weight beyond the
         // fluid it displaces (wvol is the body's mass there).
         let kick = if pressure {
-            let displaced = integrate(
-                &grid,
-                patch,
-                state.center,
-                &fields.u,
-                &mut sums,
-                |c, _, g| phase[g] * c,
-            )
-            .0;
-            (mat.density * state.volume - displaced) * g * time.dt / wvol
+            (mat.density * state.volume - displaced.0) * g * time.dt / wvol
         } else {
             DVec3::ZERO
         };
