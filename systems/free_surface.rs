@@ -53,7 +53,7 @@
 //! Sums are taken row by row in a fixed order: the results do not depend on the thread count.
 
 use crate::base::fields::{Fields, Params, SimTime};
-use crate::base::grid::Grid;
+use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::kernels::heaviside;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
 use crate::bodies::{Body, BodyFields, GridPatch};
@@ -424,19 +424,14 @@ pub fn redistance(
 ) {
     let dim = grid.dim;
     let h = grid.h;
-    let [nx, ny, nz] = grid.n;
+    let nx = grid.n[0];
     // Pseudo-time step: h/2 in 2D, h/3 in 3D (first-order Godunov is stable below h/√d).
     let dtau = if dim == 2 { 0.5 * h } else { h / 3.0 };
     let band = ls.band;
     scratch.phi0.copy_from_slice(&ls.phi);
     let phi0 = &scratch.phi0;
     let in_wall = &scratch.in_wall;
-    let nb = |i: usize, n: usize| -> (usize, usize) {
-        (
-            if i == 0 { n - 1 } else { i - 1 },
-            if i + 1 == n { 0 } else { i + 1 },
-        )
-    };
+    let three = dim == 3;
     for _ in 0..iterations {
         let phi = &ls.phi;
         scratch
@@ -444,49 +439,65 @@ pub fn redistance(
             .par_chunks_mut(nx)
             .enumerate()
             .for_each(|(row, out)| {
-                let (j, k) = (row % ny, row / ny);
-                let (jm, jp) = nb(j, ny);
-                let (km, kp) = if dim == 3 { nb(k, nz) } else { (k, k) };
-                for (i, o) in out.iter_mut().enumerate() {
-                    let (im, ip) = nb(i, nx);
-                    let c = i + nx * row;
-                    let s0 = phi0[c];
-                    let mut nbs = [(0usize, 0usize); 3];
-                    nbs[0] = (im + nx * row, ip + nx * row);
-                    nbs[1] = (i + nx * (jm + ny * k), i + nx * (jp + ny * k));
-                    if dim == 3 {
-                        nbs[2] = (i + nx * (j + ny * km), i + nx * (j + ny * kp));
-                    }
+                let rn = RowNeighbours::new(grid, row);
+                // This row and its neighbour rows in y and z, of φ⁰ and of φ.
+                let (c0, ym, yp) = (
+                    line_at(phi0, rn.c0, nx),
+                    line_at(phi0, rn.below[0], nx),
+                    line_at(phi0, rn.above[0], nx),
+                );
+                let (zm, zp) = if three {
+                    (
+                        line_at(phi0, rn.below[1], nx),
+                        line_at(phi0, rn.above[1], nx),
+                    )
+                } else {
+                    (c0, c0)
+                };
+                let (f, fym, fyp) = (
+                    line_at(phi, rn.c0, nx),
+                    line_at(phi, rn.below[0], nx),
+                    line_at(phi, rn.above[0], nx),
+                );
+                let (fzm, fzp) = if three {
+                    (line_at(phi, rn.below[1], nx), line_at(phi, rn.above[1], nx))
+                } else {
+                    (f, f)
+                };
+                let wall = in_wall.get(rn.c0..rn.c0 + nx);
+                for_row(nx, |i, im, ip| {
+                    let s0 = c0[i];
+                    // (minus, plus) neighbours per axis, of φ⁰ and of φ.
+                    let n0 = [(c0[im], c0[ip]), (ym[i], yp[i]), (zm[i], zp[i])];
+                    let nf = [(f[im], f[ip]), (fym[i], fyp[i]), (fzm[i], fzp[i])];
                     // Next to the interface: relax to the subcell distance D = φ⁰ h / Δφ⁰.
-                    let near = nbs[..dim]
-                        .iter()
-                        .any(|&(m, p)| s0 * phi0[m] < 0.0 || s0 * phi0[p] < 0.0);
-                    let v = phi[c];
+                    let near = n0[..dim].iter().any(|&(m, p)| s0 * m < 0.0 || s0 * p < 0.0);
+                    let v = f[i];
                     // Wall nodes hold the fluid's φ_w continued (`extend_into_walls`).
-                    if in_wall.get(c).copied().unwrap_or(false) {
-                        *o = v;
-                        continue;
+                    if wall.is_some_and(|w| w[i]) {
+                        out[i] = v;
+                        return;
                     }
                     if s0 == 0.0 {
-                        *o = 0.0;
-                        continue;
+                        out[i] = 0.0;
+                        return;
                     }
-                    if near {
+                    let o = if near {
                         let mut g2 = 0.0;
-                        for &(m, p) in &nbs[..dim] {
-                            let d = (0.5 * (phi0[p] - phi0[m]).abs())
-                                .max((phi0[p] - s0).abs())
-                                .max((s0 - phi0[m]).abs())
+                        for &(m, p) in &n0[..dim] {
+                            let d = (0.5 * (p - m).abs())
+                                .max((p - s0).abs())
+                                .max((s0 - m).abs())
                                 .max(1e-12 * h);
                             g2 += d * d;
                         }
                         let dist = h * s0 / g2.sqrt();
-                        *o = v - dtau / h * (s0.signum() * v.abs() - dist);
+                        v - dtau / h * (s0.signum() * v.abs() - dist)
                     } else {
                         let mut g2 = 0.0;
-                        for &(m, p) in &nbs[..dim] {
-                            let a = (v - phi[m]) / h;
-                            let b = (phi[p] - v) / h;
+                        for &(m, p) in &nf[..dim] {
+                            let a = (v - m) / h;
+                            let b = (p - v) / h;
                             let t = if s0 > 0.0 {
                                 a.max(0.0).powi(2).max(b.min(0.0).powi(2))
                             } else {
@@ -494,10 +505,10 @@ pub fn redistance(
                             };
                             g2 += t;
                         }
-                        *o = v - dtau * s0.signum() * (g2.sqrt() - 1.0);
-                    }
-                    *o = o.clamp(-band, band);
-                }
+                        v - dtau * s0.signum() * (g2.sqrt() - 1.0)
+                    };
+                    out[i] = o.clamp(-band, band);
+                });
             });
         std::mem::swap(&mut ls.phi, &mut scratch.next);
     }
