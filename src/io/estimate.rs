@@ -104,7 +104,9 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
         }
         let lo = densities.iter().fold(f64::INFINITY, |m, v| m.min(*v));
         let hi = densities.iter().fold(0.0f64, |m, v| m.max(*v));
-        if hi >= crate::solvers::variable_poisson::MULTIGRID_CONTRAST * lo {
+        if hi >= crate::solvers::variable_poisson::MULTIGRID_CONTRAST * lo
+            && crate::solvers::multigrid::coarsens_fully(&g)
+        {
             let levels = 2f64.powf(d) / (2f64.powf(d) - 1.0);
             per_node += 4.0 * levels + 2.0 * (levels - 1.0);
         }

@@ -31,6 +31,10 @@ use rayon::prelude::*;
 pub const COARSEST: usize = 512;
 /// Symmetric Gauss-Seidel sweeps (forward and backward) on the coarsest level.
 pub const COARSEST_SWEEPS: usize = 20;
+/// The most nodes a coarsest level may have for the hierarchy to be worth using: node counts
+/// with large prime factors stop the coarsening early, and the coarsest level's sweeps (one
+/// thread) neither converge nor stay cheap on a large grid.
+pub const MAX_COARSEST: usize = 4096;
 /// Weight of the damped Jacobi smoother.
 const JACOBI_WEIGHT: f64 = 0.8;
 /// Smoothing sweeps before and after the coarse correction (each red-black sweep is one
@@ -83,48 +87,79 @@ fn factors(n: [usize; 3], s: [usize; 3], dim: usize) -> [usize; 3] {
     })
 }
 
+/// The node counts of the levels of `grid`'s hierarchy, finest first, with each level's
+/// coarsening factors to the next (`[1, 1, 1]` on the coarsest); nothing is allocated per node.
+pub fn plan(grid: &Grid) -> Vec<([usize; 3], [usize; 3])> {
+    let dim = grid.dim;
+    let mut n = grid.n;
+    let mut s = [1usize; 3];
+    let mut out = Vec::new();
+    loop {
+        let f = if n.iter().product::<usize>() <= COARSEST {
+            [1; 3]
+        } else {
+            factors(n, s, dim)
+        };
+        out.push((n, f));
+        if f == [1; 3] {
+            return out;
+        }
+        for a in 0..3 {
+            s[a] *= f[a];
+            n[a] /= f[a];
+        }
+    }
+}
+
+/// Whether `grid`'s coarsening reaches a level of at most [`MAX_COARSEST`] nodes (otherwise
+/// the FFT preconditioner is the better choice at any contrast).
+pub fn coarsens_fully(grid: &Grid) -> bool {
+    plan(grid)
+        .last()
+        .is_some_and(|(n, _)| n.iter().product::<usize>() <= MAX_COARSEST)
+}
+
 impl Multigrid {
     /// The hierarchy of `grid` (operators zero until [`Multigrid::set_coefficients`]).
     pub fn new(grid: &Grid) -> Self {
         let dim = grid.dim;
-        let mut n = grid.n;
-        let mut s = [1usize; 3];
-        let mut levels = Vec::new();
-        loop {
-            let g = Grid::new(n, grid.h, [0.0; 3]);
-            let len = g.len();
-            let f = if len <= COARSEST {
-                [1; 3]
-            } else {
-                factors(n, s, dim)
-            };
-            let coarse = f != [1; 3];
-            let red_black = (0..dim).all(|a| n[a].is_multiple_of(2));
-            let cn: [usize; 3] = std::array::from_fn(|a| n[a] / f[a]);
-            let clen = if coarse { cn.iter().product() } else { 0 };
-            levels.push(Level {
-                grid: g,
-                f,
-                w: vec![[0.0; 4]; len],
-                tmp: vec![0.0; if red_black || !coarse { 0 } else { len }],
-                red_black,
-                coarse_x: vec![0.0; clen],
-                coarse_b: vec![0.0; clen],
-            });
-            if !coarse {
-                break;
-            }
-            for a in 0..3 {
-                s[a] *= f[a];
-            }
-            n = cn;
-        }
+        let levels = plan(grid)
+            .into_iter()
+            .map(|(n, f)| {
+                let g = Grid::new(n, grid.h, [0.0; 3]);
+                let len = g.len();
+                let coarse = f != [1; 3];
+                let red_black = (0..dim).all(|a| n[a].is_multiple_of(2));
+                let clen = if coarse {
+                    (0..3).map(|a| n[a] / f[a]).product()
+                } else {
+                    0
+                };
+                Level {
+                    grid: g,
+                    f,
+                    w: vec![[0.0; 4]; len],
+                    tmp: vec![0.0; if red_black || !coarse { 0 } else { len }],
+                    red_black,
+                    coarse_x: vec![0.0; clen],
+                    coarse_b: vec![0.0; clen],
+                }
+            })
+            .collect();
         Multigrid { levels }
     }
 
     /// Node counts of the levels, finest first.
     pub fn level_sizes(&self) -> Vec<[usize; 3]> {
         self.levels.iter().map(|l| l.grid.n).collect()
+    }
+
+    /// Whether the coarsening reached a level of at most [`MAX_COARSEST`] nodes
+    /// ([`coarsens_fully`]).
+    pub fn is_complete(&self) -> bool {
+        self.levels
+            .last()
+            .is_some_and(|l| l.grid.len() <= MAX_COARSEST)
     }
 
     /// Builds the levels' operators from the fine face coefficients `beta` (β on the face

@@ -56,7 +56,9 @@ pub struct VariablePoisson {
 
 impl VariablePoisson {
     /// Zero state for `grid`; with `multigrid`, the multigrid hierarchy too (which
-    /// [`VariablePoisson::choose`] then picks where β varies by [`MULTIGRID_CONTRAST`] or more).
+    /// [`VariablePoisson::choose`] then picks where β varies by [`MULTIGRID_CONTRAST`] or
+    /// more), unless the grid's node counts do not coarsen far enough
+    /// ([`crate::solvers::multigrid::coarsens_fully`]).
     pub fn new(grid: &Grid, multigrid: bool) -> Self {
         let n = grid.len();
         VariablePoisson {
@@ -66,7 +68,8 @@ impl VariablePoisson {
             p: vec![0.0; n],
             ap: vec![0.0; n],
             partial: vec![0.0; n / grid.n[0]],
-            multigrid: multigrid.then(|| Multigrid::new(grid)),
+            multigrid: (multigrid && crate::solvers::multigrid::coarsens_fully(grid))
+                .then(|| Multigrid::new(grid)),
             preconditioner: Preconditioner::Spectral,
             iterations: 0,
             residual: 0.0,
@@ -98,6 +101,8 @@ impl VariablePoisson {
 
     /// The preconditioner for the β set now: multigrid if the solver has its hierarchy and
     /// max β / min β ≥ [`MULTIGRID_CONTRAST`], else the FFT inverse.
+    ///
+    /// Whether it has the hierarchy: [`VariablePoisson::has_multigrid`].
     pub fn choose(&self) -> Preconditioner {
         if self.multigrid.is_none() {
             return Preconditioner::Spectral;
@@ -119,6 +124,11 @@ impl VariablePoisson {
         } else {
             Preconditioner::Spectral
         }
+    }
+
+    /// Whether the solver holds a multigrid hierarchy.
+    pub fn has_multigrid(&self) -> bool {
+        self.multigrid.is_some()
     }
 
     /// Mean of a field (rows in order, thread-count independent).
