@@ -19,10 +19,10 @@
 //!   (where red-black colouring breaks at the periodic wrap) damped Jacobi instead. On the
 //!   coarsest level a fixed number of symmetric (forward then backward) Gauss-Seidel sweeps.
 //!
-//! The cycle is a fixed linear, symmetric positive semi-definite operator (zero on constants),
-//! so it preconditions CG. Every update of a node reads only nodes of the other colour (or the
-//! last sweep's values), and the coarsest sweeps run in one thread: the result does not depend
-//! on the thread count.
+//! The cycle is a fixed linear, symmetric and positive operator (`tests/suite/multigrid.rs`
+//! checks both on every kind of coarsening), so it preconditions CG. Every update of a node
+//! reads only nodes of the other colour (or the last sweep's values), and the coarsest sweeps
+//! run in one thread: the result does not depend on the thread count.
 
 use crate::base::grid::{Grid, RowNeighbours, SyncPtr};
 use rayon::prelude::*;
