@@ -2,6 +2,11 @@
 //! the run that never stopped (in memory and through the command line, also after SIGKILL and
 //! SIGINT), and bad checkpoints are refused with exit status 2.
 
+#[allow(dead_code)]
+#[path = "suite/common.rs"]
+mod common;
+
+use common::Scratch;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
@@ -253,11 +258,8 @@ fn tumble() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tumble"))
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tumble-ckpt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmp(name: &str) -> Scratch {
+    Scratch::new("ckpt", name)
 }
 
 /// The latest complete checkpoint in the run directory `dir`.
@@ -343,8 +345,10 @@ fn scene_file(dir: &Path) -> PathBuf {
 }
 
 fn reference_long() -> &'static Path {
-    static REF: OnceLock<PathBuf> = OnceLock::new();
-    REF.get_or_init(|| {
+    // The scratch directory lives as long as the process (statics are not dropped: this one
+    // directory stays behind), so the tests that compare against it can share it.
+    static REF: OnceLock<(Scratch, PathBuf)> = OnceLock::new();
+    &REF.get_or_init(|| {
         let d = tmp("reference");
         let out = d.join("run");
         ok(&run(&[
@@ -356,8 +360,9 @@ fn reference_long() -> &'static Path {
             LONG_END,
             "--quiet",
         ]));
-        out
+        (d, out)
     })
+    .1
 }
 
 /// Wait until the run in `dir` has a checkpoint at t ≥ `t` (the child must still be running).

@@ -2,16 +2,18 @@
 //! the data is the simulation's, and the time series of the bodies are complete.
 #![cfg(feature = "hdf5")]
 
-use std::path::{Path, PathBuf};
+#[allow(dead_code)]
+#[path = "suite/common.rs"]
+mod common;
+
+use common::Scratch;
+use std::path::Path;
 use tumble::run::{RunOptions, run_scene};
 use tumble::scene::Scene;
 use tumble::sim::engine::Simulation;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tumble-hdf5-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmp(name: &str) -> Scratch {
+    Scratch::new("hdf5", name)
 }
 
 const SCENE_2D: &str = r#"Scene(

@@ -4,6 +4,7 @@
 //! and inertia integrated from χ on the grid). Every reference value is the analytic geometry
 //! of the polygonal solid (regular `N`-gon prisms), not the code's own output.
 
+use crate::common::Scratch;
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -20,11 +21,8 @@ fn manifest_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tumble-cup-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> Scratch {
+    Scratch::new("cup", name)
 }
 
 fn tumble() -> Command {

@@ -1,5 +1,6 @@
 //! PNG plots: `line_chart`, `plot_run_dir` and `tumble plot`.
 
+use crate::common::Scratch;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tumble::io::plot::{
@@ -9,11 +10,8 @@ use tumble::io::plot::{
 use tumble::scene::Units;
 
 /// A fresh, empty directory under the system temp dir, unique to this process and `name`.
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tumble-plot-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmp(name: &str) -> Scratch {
+    Scratch::new("plot", name)
 }
 
 /// Checks the PNG signature and that the IHDR chunk says 900x600.
@@ -241,7 +239,7 @@ const SERIES: &str = "t,dt,energy,enstrophy,circulation,max_omega
 
 /// A synthetic run directory: series.csv, bodies.csv with `bodies` 2D bodies (columns in a
 /// shuffled order, to check lookup by name), contacts.csv.
-fn run_dir(name: &str, bodies: usize) -> PathBuf {
+fn run_dir(name: &str, bodies: usize) -> Scratch {
     let d = tmp(name);
     std::fs::write(d.join("series.csv"), SERIES).unwrap();
     let cols = [
@@ -519,7 +517,8 @@ fn vacuum_free_fall_energy_is_analytic_and_conserved() {
     )"#
     );
     let scene = tumble::scene::Scene::parse(&text, "free-fall.ron", "free-fall").unwrap();
-    let d = tmp("free-fall").join("run");
+    let scratch = tmp("free-fall");
+    let d = scratch.join("run");
     let opts = RunOptions {
         out: Some(d.clone()),
         quiet: true,
