@@ -79,7 +79,7 @@ use crate::base::params::BodyCoupling;
 use crate::bodies::free_surface::FreeSurface;
 use crate::bodies::{Body, BodyFields, GridPatch, Material, RigidState};
 use crate::solvers::Spectral;
-use crate::solvers::variable_poisson::{MAX_ITERATIONS, MULTIGRID_CONTRAST, VariablePoisson};
+use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson, wants_multigrid};
 use crate::systems::rigid_velocity::{BodySums, integrate_n, penalized_weight};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
@@ -398,22 +398,16 @@ impl crate::schedule::Plugin for PressurePlugin {
             ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
             let grid = ctx.world.resource::<Grid>().clone();
             // The multigrid hierarchy only where the densities can differ by its contrast.
-            let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-            let mut add = |d: f64| {
-                lo = lo.min(d);
-                hi = hi.max(d);
-            };
-            add(ctx.world.resource::<Params>().rho_fluid);
+            let mut densities = vec![ctx.world.resource::<Params>().rho_fluid];
             for fs in ctx.world.query::<&FreeSurface>().iter(ctx.world) {
-                add(fs.liquid_density);
-                add(fs.gas_density);
+                densities.extend([fs.liquid_density, fs.gas_density]);
             }
             for (body, mat) in ctx.world.query::<(&Body, &Material)>().iter(ctx.world) {
                 if !body.is_static() {
-                    add(mat.density);
+                    densities.push(mat.density);
                 }
             }
-            let multigrid = hi >= MULTIGRID_CONTRAST * lo;
+            let multigrid = wants_multigrid(&grid, densities);
             ctx.insert_resource(PressureSolver::new(&grid, multigrid));
             // One slot per body id (the bodies are spawned before the plugins are built), so
             // the step does not allocate.

@@ -102,11 +102,7 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
                 densities.push(b.density.unwrap_or(fluid));
             }
         }
-        let lo = densities.iter().fold(f64::INFINITY, |m, v| m.min(*v));
-        let hi = densities.iter().fold(0.0f64, |m, v| m.max(*v));
-        if hi >= crate::solvers::variable_poisson::MULTIGRID_CONTRAST * lo
-            && crate::solvers::multigrid::coarsens_fully(&g)
-        {
+        if crate::solvers::variable_poisson::wants_multigrid(&g, densities) {
             let levels = 2f64.powf(d) / (2f64.powf(d) - 1.0);
             per_node += 4.0 * levels + 2.0 * (levels - 1.0);
         }

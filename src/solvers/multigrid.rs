@@ -154,14 +154,6 @@ impl Multigrid {
         self.levels.iter().map(|l| l.grid.n).collect()
     }
 
-    /// Whether the coarsening reached a level of at most [`MAX_COARSEST`] nodes
-    /// ([`coarsens_fully`]).
-    pub fn is_complete(&self) -> bool {
-        self.levels
-            .last()
-            .is_some_and(|l| l.grid.len() <= MAX_COARSEST)
-    }
-
     /// Builds the levels' operators from the fine face coefficients `beta` (β on the face
     /// between node i and i + e_a, stored at i, per axis: the stencil weights of A).
     pub fn set_coefficients(&mut self, beta: &[Vec<f64>]) {

@@ -22,6 +22,18 @@ pub const MAX_ITERATIONS: usize = 2000;
 /// against 0.093 to 0.105 s (2 cores, 2026-11-25).
 pub const MULTIGRID_CONTRAST: f64 = 5.0;
 
+/// Whether a scene whose fluid phases and moving bodies have these `densities` wants the
+/// multigrid hierarchy: they span a ratio of [`MULTIGRID_CONTRAST`] or more, and `grid`
+/// coarsens far enough ([`crate::solvers::multigrid::coarsens_fully`]).
+pub fn wants_multigrid(grid: &Grid, densities: impl IntoIterator<Item = f64>) -> bool {
+    let (lo, hi) = densities
+        .into_iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        });
+    hi >= MULTIGRID_CONTRAST * lo && crate::solvers::multigrid::coarsens_fully(grid)
+}
+
 /// The preconditioner of the conjugate gradients.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Preconditioner {

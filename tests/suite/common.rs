@@ -61,3 +61,12 @@ impl Rng {
         (0..len).map(|_| self.next()).collect()
     }
 }
+
+/// `f` run on a rayon pool of `threads` threads.
+pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}

@@ -1,14 +1,11 @@
 //! The same scene gives bit-identical results with 1 and 2 threads.
 
+use crate::common::on_threads;
 use tumble::scene::Scene;
 use tumble::sim::engine::Simulation;
 
 fn run(threads: usize, text: &str) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, f64) {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    pool.install(|| {
+    on_threads(threads, || {
         let scene = Scene::parse(text, "det", "det").unwrap();
         let mut sim = Simulation::new(scene).unwrap();
         for _ in 0..5 {
@@ -84,11 +81,7 @@ struct BodyRun {
 }
 
 fn run_with_bodies(threads: usize, text: &str, steps: usize) -> BodyRun {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    pool.install(|| {
+    on_threads(threads, || {
         let scene = Scene::parse(text, "det", "det").unwrap();
         let mut sim = Simulation::new(scene).unwrap();
         let mut steps_in_contact = 0;

@@ -4,10 +4,10 @@
 //! the contrast, a symmetric positive preconditioner on grids of every coarsening kind, and
 //! results independent of the thread count.
 
-use crate::common::Rng;
+use crate::common::{Rng, on_threads};
 use tumble::base::grid::Grid;
 use tumble::solvers::Spectral;
-use tumble::solvers::multigrid::Multigrid;
+use tumble::solvers::multigrid::{Multigrid, coarsens_fully};
 use tumble::solvers::variable_poisson::{Preconditioner, VariablePoisson};
 
 /// A density field: a ball of density `contrast` (relative to 1 around it) of radius 0.3 of the
@@ -187,6 +187,27 @@ fn multigrid_levels() {
     // An axis of 7 nodes cannot be coarsened; the others stop when their spacing reaches
     // twice its spacing.
     assert_eq!(levels([28, 28, 7]), vec![[28, 28, 7], [14, 14, 7]]);
+    // dkt's grid: by 2 twice, then by 3 across (15 -> 5) while z goes on by 2 and by 3, until
+    // a level has at most 512 nodes (5 x 5 x 15 = 375).
+    assert_eq!(
+        levels([60, 60, 240]),
+        vec![
+            [60, 60, 240],
+            [30, 30, 120],
+            [15, 15, 60],
+            [5, 5, 30],
+            [5, 5, 15]
+        ]
+    );
+    // A prime node count does not coarsen: the hierarchy is incomplete, and a solver asked
+    // for one keeps the FFT preconditioner at any contrast.
+    let prime = Grid::new([31, 31, 31], 1.0 / 31.0, [0.0; 3]);
+    assert!(!coarsens_fully(&prime));
+    assert!(coarsens_fully(&Grid::new([64, 64, 64], 1.0, [0.0; 3])));
+    let mut vp = VariablePoisson::new(&prime, true);
+    assert!(!vp.has_multigrid());
+    vp.beta = faces(&prime, &density(&prime, 1000.0));
+    assert_eq!(vp.choose(), Preconditioner::Spectral);
 }
 
 /// The preconditioner and the whole solve give the same bits on 1, 2 and 3 threads.
@@ -211,16 +232,7 @@ fn multigrid_is_thread_count_independent() {
         );
         phi.iter().map(|v| v.to_bits()).collect::<Vec<u64>>()
     };
-    let results: Vec<Vec<u64>> = [1, 2, 3]
-        .iter()
-        .map(|&t| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .unwrap()
-                .install(run)
-        })
-        .collect();
+    let results: Vec<Vec<u64>> = [1, 2, 3].iter().map(|&t| on_threads(t, run)).collect();
     assert!(results[1] == results[0], "2 threads differ from 1");
     assert!(results[2] == results[0], "3 threads differ from 1");
 }

@@ -3,7 +3,7 @@
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use crate::common::Rng;
+use crate::common::{Rng, on_threads};
 use tumble::base::grid::Grid;
 use tumble::solvers::fft::*;
 use tumble::solvers::operators::*;
@@ -580,13 +580,7 @@ fn bit_identical_across_thread_counts() {
         // 12 threads also changes the number of scratch workers (chunks).
         let results: Vec<Vec<u64>> = [1, 2, 3, 12]
             .iter()
-            .map(|&t| {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build()
-                    .unwrap()
-                    .install(|| run_all(n))
-            })
+            .map(|&t| on_threads(t, || run_all(n)))
             .collect();
         for (t, r) in results.iter().enumerate().skip(1) {
             assert!(
