@@ -769,25 +769,40 @@ fn add_product<const AVX2: bool>(
 ) {
     #[cfg(target_arch = "x86_64")]
     if AVX2 {
-        use std::arch::x86_64::*;
-        // SAFETY: AVX2 is only set under `group_avx2`, which checked the CPU; the arrays
-        // hold LANES values, so q..q + 4 is in bounds.
-        unsafe {
-            let keep = _mm256_set1_pd(keep);
-            let cut2 = _mm256_set1_pd(cut2);
-            for q in (0..LANES).step_by(4) {
-                let active = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_loadu_pd(m2.as_ptr().add(q)), cut2);
-                let w = _mm256_blendv_pd(keep, _mm256_loadu_pd(w.as_ptr().add(q)), active);
-                let p = _mm256_mul_pd(w, _mm256_loadu_pd(s.as_ptr().add(q)));
-                let r = _mm256_add_pd(_mm256_loadu_pd(o.as_ptr().add(q)), p);
-                _mm256_storeu_pd(o.as_mut_ptr().add(q), r);
-            }
-        }
+        // SAFETY: AVX2 is only set under `group_avx2`, which checked the CPU.
+        unsafe { add_product_avx2(o, w, keep, m2, cut2, s) };
         return;
     }
     for l in 0..LANES {
         let w = if m2[l] > cut2 { w[l] } else { keep };
         o[l] += w * s[l];
+    }
+}
+
+/// [`add_product`] in AVX2 registers. A function of its own with the feature enabled, so that
+/// the intrinsics are inlined into it (and it into the AVX2 sweep), not called.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add_product_avx2(
+    o: &mut [f64; LANES],
+    w: &[f64; LANES],
+    keep: f64,
+    m2: &[f64; LANES],
+    cut2: f64,
+    s: &[f64; LANES],
+) {
+    use std::arch::x86_64::*;
+    let keep = _mm256_set1_pd(keep);
+    let cut2 = _mm256_set1_pd(cut2);
+    for q in (0..LANES).step_by(4) {
+        // SAFETY: the arrays hold LANES values, so q..q + 4 is in bounds.
+        unsafe {
+            let active = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_loadu_pd(m2.as_ptr().add(q)), cut2);
+            let w = _mm256_blendv_pd(keep, _mm256_loadu_pd(w.as_ptr().add(q)), active);
+            let p = _mm256_mul_pd(w, _mm256_loadu_pd(s.as_ptr().add(q)));
+            let r = _mm256_add_pd(_mm256_loadu_pd(o.as_ptr().add(q)), p);
+            _mm256_storeu_pd(o.as_mut_ptr().add(q), r);
+        }
     }
 }
 
