@@ -119,7 +119,7 @@ pub fn baroclinic(
                 let uc = DVec3::new(u[0][c], u[1][c], if dim == 3 { u[2][c] } else { 0.0 });
                 let mut acc = DVec3::ZERO;
                 for q in 0..dim {
-                    let dudt = (u[q][c] - u_prev[q][c]) * inv_dtp;
+                    let dudt = (u[q][c] - u_prev[q][c] as f64) * inv_dtp;
                     acc[q] = dudt + uc.dot(grad(&u[q])) - g[q];
                 }
                 -(grho / rho[c]).cross(acc)

@@ -57,7 +57,7 @@ use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::kernels::heaviside;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
 use crate::bodies::{Body, BodyFields, GridPatch};
-use crate::systems::transport::{LineScratch, sweep};
+use crate::systems::transport::{LinePool, LineScratch, sweep};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -77,7 +77,7 @@ struct WallNode {
 /// 1 - χ_s per node (empty without walls).
 #[derive(Resource)]
 pub struct FreeSurfaceScratch {
-    pool: Vec<LineScratch>,
+    pool: LinePool,
     phi0: Vec<f64>,
     next: Vec<f64>,
     partial: Vec<[f64; 2]>,
@@ -96,7 +96,7 @@ impl FreeSurfaceScratch {
     pub fn new(grid: &Grid) -> Self {
         let nmax = *grid.n.iter().max().unwrap_or(&1);
         FreeSurfaceScratch {
-            pool: (0..32).map(|_| LineScratch::new(nmax, 1)).collect(),
+            pool: LinePool::per_thread(|| LineScratch::new(nmax, 1)),
             phi0: vec![0.0; grid.len()],
             next: vec![0.0; grid.len()],
             partial: vec![[0.0; 2]; grid.len() / grid.n[0]],
@@ -396,7 +396,7 @@ pub fn free_surface(
             &u[axis],
             0.0,
             params.remesh_kernel,
-            &mut scratch.pool,
+            &scratch.pool,
         );
     }
     extend_into_walls(&grid, &mut ls.phi, &scratch.wall);

@@ -4,8 +4,9 @@
 //! Derivatives are spectral, so a band-limited vorticity gives the exact velocity. In 3D the
 //! vorticity is first made divergence-free (ω̂ ← ω̂ - k (k·ω̂)/|k|²) unless the diffusion
 //! system already did so for the same vorticity. The mean (k = 0) velocity is the scene's
-//! uniform background velocity. The velocity it replaces is kept as the previous velocity
-//! (for the mid-step extrapolation in transport and for ∂u/∂t in the baroclinic term).
+//! uniform background velocity. It replaces the mid-step velocity transport left in `u` (the
+//! velocity before it is kept as the previous one, for the mid-step extrapolation in transport
+//! and for ∂u/∂t in the baroclinic term).
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::solvers::Spectral;
@@ -19,7 +20,6 @@ pub fn poisson(
     mut spectral: ResMut<Spectral>,
 ) {
     let fields = &mut *fields;
-    std::mem::swap(&mut fields.u, &mut fields.u_prev);
     fields.dt_prev = time.dt;
     let (omega, u, version) = fields.same_version_parts();
     spectral.velocity(omega, version, params.background, u);

@@ -33,6 +33,7 @@ use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, SyncPtr, component_ptrs, periodic_offset as wrap};
 use crate::base::kernels::{lambda42_weights, m4prime_weights};
 use crate::base::params::RemeshKernel;
+use crate::base::pool::Pool;
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -40,11 +41,14 @@ use rayon::prelude::*;
 /// only sets load balance).
 const CHUNKS: usize = 32;
 
+/// Per-thread scratch of the sweeps (see [`LineScratch`]).
+pub type LinePool = Pool<LineScratch>;
+
 /// Scratch buffers for the sweeps, owned by the transport system (nothing is allocated in a
 /// step).
 #[derive(Resource)]
 pub struct TransportScratch {
-    pool: Vec<LineScratch>,
+    pool: LinePool,
     /// Whether the next step sweeps axes in reverse order.
     reverse: bool,
 }
@@ -54,7 +58,7 @@ impl TransportScratch {
     pub fn new(grid: &Grid) -> Self {
         let nmax = *grid.n.iter().max().unwrap_or(&1);
         let nc = grid.omega_components();
-        let pool = (0..CHUNKS).map(|_| LineScratch::new(nmax, nc)).collect();
+        let pool = Pool::per_thread(|| LineScratch::new(nmax, nc));
         TransportScratch {
             pool,
             reverse: false,
@@ -91,19 +95,21 @@ pub fn transport(
     } else {
         0.0
     };
-    // The mid-step velocity, made in place of the previous one (the Poisson solve restores
-    // u_prev's meaning when it swaps in the new velocity).
-    let (omega, u, u_mid) = fields.transport_parts();
-    for (m, u) in u_mid.iter_mut().zip(u) {
-        m.par_chunks_mut(4096)
-            .zip(u.par_chunks(4096))
-            .for_each(|(m, u)| {
-                for i in 0..m.len() {
-                    m[i] = u[i] + a * (u[i] - m[i]);
+    // The mid-step velocity, made in place of the velocity (which the Poisson solve replaces
+    // at the end of the step); the velocity it replaces becomes the previous one.
+    let (omega, u, u_prev) = fields.transport_parts();
+    for (u, up) in u.iter_mut().zip(u_prev.iter_mut()) {
+        u.par_chunks_mut(4096)
+            .zip(up.par_chunks_mut(4096))
+            .for_each(|(u, up)| {
+                for i in 0..u.len() {
+                    let now = u[i];
+                    u[i] = now + a * (now - up[i] as f64);
+                    up[i] = now as f32;
                 }
             });
     }
-    let u = &*u_mid;
+    let u = &*u;
     if grid.dim == 3 && !scratch.reverse {
         stretch(&grid, dt, omega, u);
     }
@@ -122,7 +128,7 @@ pub fn transport(
             &u[axis],
             cutoff,
             params.remesh_kernel,
-            &mut scratch.pool,
+            &scratch.pool,
         );
     }
     if grid.dim == 3 && scratch.reverse {
@@ -354,7 +360,7 @@ pub fn sweep(
     u_axis: &[f64],
     cutoff: f64,
     kernel: RemeshKernel,
-    pool: &mut [LineScratch],
+    pool: &LinePool,
 ) {
     let n = grid.n[axis];
     let [nx, ny, _] = grid.n;
@@ -376,10 +382,12 @@ pub fn sweep(
     };
     let cdt = dt / grid.h;
     let cut2 = cutoff * cutoff;
-    let per = ngroups.div_ceil(pool.len());
+    let per = ngroups.div_ceil(CHUNKS);
+    let nmax = *grid.n.iter().max().unwrap_or(&1);
     #[cfg(target_arch = "x86_64")]
     let avx2 = std::arch::is_x86_feature_detected!("avx2");
-    pool.par_iter_mut().enumerate().for_each(|(chunk, s)| {
+    // One work unit: the groups of lines `chunk * per ..`.
+    let sweep_chunk = |chunk: usize, s: &mut LineScratch| {
         let lo = (chunk * per).min(ngroups);
         let hi = ((chunk + 1) * per).min(ngroups);
         debug_assert!(s.nmax >= n && s.w_in.len() >= nc);
@@ -430,7 +438,10 @@ pub fn sweep(
             }
             group_generic::<false>(s, &group, u_axis, &ptrs, cdt, cut2, kernel);
         }
-    });
+    };
+    (0..CHUNKS)
+        .into_par_iter()
+        .for_each(|chunk| pool.with(|| LineScratch::new(nmax, nc), |s| sweep_chunk(chunk, s)));
 }
 
 /// One group of lines of a sweep: `count` real lines of `n` nodes whose first nodes are

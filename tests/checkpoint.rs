@@ -82,9 +82,9 @@ fn sim(text: &str) -> Simulation {
     Simulation::new(Scene::parse(text, "test", "test").unwrap()).unwrap()
 }
 
-fn bits(f: &[Vec<f64>]) -> Vec<Vec<u64>> {
+fn bits<T: Copy + Into<f64>>(f: &[Vec<T>]) -> Vec<Vec<u64>> {
     f.iter()
-        .map(|c| c.iter().map(|x| x.to_bits()).collect())
+        .map(|c| c.iter().map(|&x| x.into().to_bits()).collect())
         .collect()
 }
 

@@ -9,7 +9,7 @@ use bevy_ecs::prelude::Resource;
 
 /// Vorticity (a new version), velocity and previous velocity, as [`Fields::transport_parts`]
 /// hands them out.
-pub type TransportParts<'a> = (&'a mut [Vec<f64>], &'a [Vec<f64>], &'a mut [Vec<f64>]);
+pub type TransportParts<'a> = (&'a mut [Vec<f64>], &'a mut [Vec<f64>], &'a mut [Vec<f32>]);
 
 /// Vorticity and velocity on the grid.
 ///
@@ -22,11 +22,16 @@ pub struct Fields {
     omega_version: u64,
     /// Velocity, `grid.dim` components.
     pub u: Vec<Vec<f64>>,
-    /// The velocity of the previous step (before the last Poisson solve). Within a step,
-    /// from transport to the Poisson solve, it holds the mid-step velocity that carried the
-    /// particles instead (transport extrapolates it in place, which saves a vector field);
-    /// the Poisson solve then makes it the previous step's velocity again.
-    pub u_prev: Vec<Vec<f64>>,
+    /// The velocity of the previous step, as transport found it, in single precision.
+    ///
+    /// It only enters differences with `u` over one step, whose own error (the mid-step
+    /// extrapolation's, or the first-order ∂u/∂t of the baroclinic term) is O(Δt ∂²u/∂t²);
+    /// the rounding, 2⁻²⁴ |u|, is below that whenever Δt |∂u/∂t|/|u| is above about 1e-4, i.e.
+    /// at any usable step. It saves a vector field of doubles (12 B per node in 3D).
+    ///
+    /// Transport stores the velocity it found here (and leaves the mid-step velocity that
+    /// carried the particles in `u`, which the Poisson solve then replaces).
+    pub u_prev: Vec<Vec<f32>>,
     /// The step between `u_prev` and `u`; 0 until there is a previous velocity.
     pub dt_prev: f64,
 }
@@ -38,7 +43,7 @@ impl Fields {
             omega: vec![vec![0.0; grid.len()]; grid.omega_components()],
             omega_version: 0,
             u: vec![vec![0.0; grid.len()]; grid.dim],
-            u_prev: vec![vec![0.0; grid.len()]; grid.dim],
+            u_prev: vec![vec![0.0f32; grid.len()]; grid.dim],
             dt_prev: 0.0,
         }
     }
@@ -67,10 +72,11 @@ impl Fields {
     }
 
     /// Start a new vorticity version and hand out vorticity, velocity and previous velocity
-    /// together (transport, which turns the previous velocity into the mid-step one).
+    /// together (transport, which turns the velocity into the mid-step one and keeps the
+    /// velocity it found as the previous one).
     pub fn transport_parts(&mut self) -> TransportParts<'_> {
         self.omega_version += 1;
-        (&mut self.omega, &self.u, &mut self.u_prev)
+        (&mut self.omega, &mut self.u, &mut self.u_prev)
     }
 
     /// Vorticity and velocity together without starting a new version: only for a solver that

@@ -5,3 +5,4 @@ pub mod fields;
 pub mod grid;
 pub mod kernels;
 pub mod params;
+pub mod pool;

@@ -304,7 +304,7 @@ pub struct Checkpoint {
     pub omega: Vec<Vec<f64>>,
     /// Velocity components.
     pub u: Vec<Vec<f64>>,
-    /// Previous velocity components.
+    /// Previous velocity components (kept in single precision by the run, widened here).
     pub u_prev: Vec<Vec<f64>>,
     /// The step between `u_prev` and `u`.
     pub dt_prev: f64,
@@ -367,20 +367,21 @@ impl<W: Write> Enc<W> {
         self.f64(v.y)?;
         self.f64(v.z)
     }
-    fn f64s(&mut self, v: &[f64]) -> io::Result<()> {
+    fn f64s<T: Copy + Into<f64>>(&mut self, v: &[T]) -> io::Result<()> {
         self.u64(v.len() as u64)?;
         let mut buf = std::mem::take(&mut self.buf);
         for chunk in v.chunks(8192) {
             buf.clear();
-            for x in chunk {
-                buf.extend_from_slice(&x.to_bits().to_le_bytes());
+            for &x in chunk {
+                buf.extend_from_slice(&x.into().to_bits().to_le_bytes());
             }
             self.bytes(&buf)?;
         }
         self.buf = buf;
         Ok(())
     }
-    fn fields(&mut self, f: &[Vec<f64>]) -> io::Result<()> {
+    /// A field's components as doubles (single precision ones are widened, exactly).
+    fn fields<T: Copy + Into<f64>>(&mut self, f: &[Vec<T>]) -> io::Result<()> {
         self.u32(f.len() as u32)?;
         for c in f {
             self.f64s(c)?;
@@ -703,7 +704,10 @@ impl Checkpoint {
                 dst.copy_from_slice(src);
             }
             for (dst, src) in f.u_prev.iter_mut().zip(&self.u_prev) {
-                dst.copy_from_slice(src);
+                // Saved from single precision, so exact.
+                for (d, &s) in dst.iter_mut().zip(src) {
+                    *d = s as f32;
+                }
             }
             f.dt_prev = self.dt_prev;
         }

@@ -83,7 +83,7 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
     let flow = !scene.vacuum;
     let pressure = bodies && flow && scene.numerics.body_coupling == BodyCoupling::Pressure;
     // f64 arrays per node.
-    let mut per_node = nc + 2.0 * d; // Fields (ω, u, u_prev; transport makes the mid-step velocity in u_prev)
+    let mut per_node = nc + 1.5 * d; // Fields (ω, u, and u_prev in single precision)
     if bodies {
         per_node += 4.0 + d + 0.5; // BodyFields: ρ, ρ_P, χ, φ, du, owner (u32)
     }

@@ -1,6 +1,7 @@
 //! The FFT engine of the periodic grid: real-to-complex 2D/3D transforms with their plans and
-//! per-worker scratch, all allocated by [`FftEngine::new`]; no other method allocates. The operators
-//! built on it (Poisson, diffusion, curl) are in [`crate::solvers::operators`].
+//! per-thread scratch, all allocated by [`FftEngine::new`]; no other method allocates (unless
+//! the engine runs on more threads than it was made with: then the scratch grows once). The
+//! operators built on it (Poisson, diffusion, curl) are in [`crate::solvers::operators`].
 //!
 //! # Layout of a complex field
 //!
@@ -37,12 +38,13 @@ use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
 use crate::base::grid::{Grid, SyncPtr};
+use crate::base::pool::Pool;
 
 /// Double precision complex number.
 pub type C64 = Complex<f64>;
 
-/// Minimum number of scratch workers (parallel chunks). Only scheduling depends on it, never
-/// results.
+/// Minimum number of parallel chunks of a pass. Only scheduling depends on it, never results
+/// (and not memory: the scratch is per thread).
 const MIN_WORKERS: usize = 32;
 
 /// Minimum number of z-planes for the fused x/y plane passes (one plane per unit) in 3D.
@@ -68,7 +70,28 @@ pub fn wavenumber(m: usize, n: usize, len: f64) -> f64 {
 /// read together.
 const TILE: usize = 8;
 
-/// Per-worker scratch space (one worker per parallel chunk).
+/// The sizes of a [`Worker`]'s buffers.
+#[derive(Clone, Copy, Debug)]
+struct WorkerShape {
+    nx: usize,
+    rows: usize,
+    line: usize,
+    scratch: usize,
+}
+
+impl WorkerShape {
+    fn make(self) -> Worker {
+        Worker {
+            real: vec![0.0; self.nx],
+            rows: vec![C64::default(); self.rows],
+            line: vec![C64::default(); self.line],
+            scratch: vec![C64::default(); self.scratch],
+        }
+    }
+}
+
+/// Scratch space of one task (the engine keeps one per thread, see [`Pool`]); every unit
+/// overwrites what it reads of it.
 struct Worker {
     /// A real row (`nx`), since realfft's forward transform destroys its input.
     real: Vec<f64>,
@@ -210,6 +233,10 @@ struct Engine {
     /// Whether the x and y transforms run fused, one z-plane per unit (3D with enough planes);
     /// otherwise x rows and y line bundles are separate passes.
     fused: bool,
+    /// The buffers of a worker.
+    shape: WorkerShape,
+    /// Parallel chunks of a pass (a fixed number for the grid: only scheduling depends on it).
+    chunks: usize,
 }
 
 /// Panics on the buffer-size errors (internal invariants, never user data) and ignores
@@ -259,7 +286,7 @@ impl Engine {
         &self,
         pass: &LinePass,
         fft: &dyn Fft<f64>,
-        pool: &mut [Worker],
+        pool: &Pool<Worker>,
         src: Option<&[C64]>,
         data: &mut [C64],
     ) {
@@ -272,14 +299,19 @@ impl Engine {
             None => dst,
         };
         let units = pass.units();
-        let nw = pool.len();
-        pool.par_iter_mut().enumerate().for_each(|(w, wk)| {
-            for u in (w * units / nw)..((w + 1) * units / nw) {
-                // SAFETY: units are disjoint and each is run by exactly one worker; `src` is
-                // either `data` (same unit, written only after being read) or a separate buffer
-                // that is only read.
-                unsafe { pass.run_unit(u, fft, wk, srcp, dst) };
-            }
+        let nw = self.chunks;
+        (0..nw).into_par_iter().for_each(|w| {
+            pool.with(
+                || self.shape.make(),
+                |wk| {
+                    for u in (w * units / nw)..((w + 1) * units / nw) {
+                        // SAFETY: units are disjoint and each is run by exactly one task;
+                        // `src` is either `data` (same unit, written only after being read) or
+                        // a separate buffer that is only read.
+                        unsafe { pass.run_unit(u, fft, wk, srcp, dst) };
+                    }
+                },
+            )
         });
     }
 
@@ -340,32 +372,40 @@ impl Engine {
     }
 
     /// Unnormalized forward transform of `input` into `out`.
-    fn forward(&self, pool: &mut [Worker], input: &[f64], out: &mut [C64]) {
+    fn forward(&self, pool: &Pool<Worker>, input: &[f64], out: &mut [C64]) {
         let (nx, ny, nxh) = (self.nx, self.ny, self.nxh);
+        let make = || self.shape.make();
         if self.fused {
-            let ppc = self.planes_per_chunk(pool.len());
+            let ppc = self.planes_per_chunk(self.chunks);
             input
                 .par_chunks(ppc * nx * ny)
                 .zip(out.par_chunks_mut(ppc * nxh * ny))
-                .zip(pool.par_iter_mut())
-                .for_each(|((inp, o), wk)| {
-                    for (pi, po) in inp.chunks_exact(nx * ny).zip(o.chunks_exact_mut(nxh * ny)) {
-                        self.forward_plane(wk, pi, po);
-                    }
+                .for_each(|(inp, o)| {
+                    pool.with(make, |wk| {
+                        for (pi, po) in inp.chunks_exact(nx * ny).zip(o.chunks_exact_mut(nxh * ny))
+                        {
+                            self.forward_plane(wk, pi, po);
+                        }
+                    })
                 });
         } else {
-            let rpc = self.rows_per_chunk(pool.len());
+            let rpc = self.rows_per_chunk(self.chunks);
             let sl = self.r2c.get_scratch_len();
             let r2c = &*self.r2c;
             input
                 .par_chunks(rpc * nx)
                 .zip(out.par_chunks_mut(rpc * nxh))
-                .zip(pool.par_iter_mut())
-                .for_each(|((inp, o), wk)| {
-                    for (ri, ro) in inp.chunks_exact(nx).zip(o.chunks_exact_mut(nxh)) {
-                        wk.real.copy_from_slice(ri);
-                        check(r2c.process_with_scratch(&mut wk.real, ro, &mut wk.scratch[..sl]));
-                    }
+                .for_each(|(inp, o)| {
+                    pool.with(make, |wk| {
+                        for (ri, ro) in inp.chunks_exact(nx).zip(o.chunks_exact_mut(nxh)) {
+                            wk.real.copy_from_slice(ri);
+                            check(r2c.process_with_scratch(
+                                &mut wk.real,
+                                ro,
+                                &mut wk.scratch[..sl],
+                            ));
+                        }
+                    })
                 });
             self.run_pass(&self.ypass, &*self.y_fwd, pool, None, out);
         }
@@ -378,7 +418,7 @@ impl Engine {
     /// `work` is destroyed.
     fn inverse(
         &self,
-        pool: &mut [Worker],
+        pool: &Pool<Worker>,
         mut src: Option<&[C64]>,
         work: &mut [C64],
         out: &mut [f64],
@@ -390,26 +430,36 @@ impl Engine {
         let scale = 1.0 / self.real_len() as f64;
         if self.fused {
             // `src` was consumed by the z pass (fused implies 3D).
-            let ppc = self.planes_per_chunk(pool.len());
+            let ppc = self.planes_per_chunk(self.chunks);
             work.par_chunks(ppc * nxh * ny)
                 .zip(out.par_chunks_mut(ppc * nx * ny))
-                .zip(pool.par_iter_mut())
-                .for_each(|((wi, o), wk)| {
-                    for (pi, po) in wi.chunks_exact(nxh * ny).zip(o.chunks_exact_mut(nx * ny)) {
-                        self.inverse_plane(wk, pi, po, scale);
-                    }
+                .for_each(|(wi, o)| {
+                    pool.with(
+                        || self.shape.make(),
+                        |wk| {
+                            for (pi, po) in
+                                wi.chunks_exact(nxh * ny).zip(o.chunks_exact_mut(nx * ny))
+                            {
+                                self.inverse_plane(wk, pi, po, scale);
+                            }
+                        },
+                    )
                 });
             return;
         }
         self.run_pass(&self.ypass, &*self.y_inv, pool, src.take(), work);
-        let rpc = self.rows_per_chunk(pool.len());
+        let rpc = self.rows_per_chunk(self.chunks);
         work.par_chunks_mut(rpc * nxh)
             .zip(out.par_chunks_mut(rpc * nx))
-            .zip(pool.par_iter_mut())
-            .for_each(|((wi, o), wk)| {
-                for (ri, ro) in wi.chunks_exact_mut(nxh).zip(o.chunks_exact_mut(nx)) {
-                    self.c2r_row(ri, ro, &mut wk.scratch, scale);
-                }
+            .for_each(|(wi, o)| {
+                pool.with(
+                    || self.shape.make(),
+                    |wk| {
+                        for (ri, ro) in wi.chunks_exact_mut(nxh).zip(o.chunks_exact_mut(nx)) {
+                            self.c2r_row(ri, ro, &mut wk.scratch, scale);
+                        }
+                    },
+                )
             });
     }
 }
@@ -417,7 +467,7 @@ impl Engine {
 /// The FFT engine of one [`Grid`]: plans (immutable) and per-worker scratch.
 pub struct FftEngine {
     eng: Engine,
-    pool: Vec<Worker>,
+    pool: Pool<Worker>,
 }
 
 impl FftEngine {
@@ -461,18 +511,17 @@ impl FftEngine {
             line_len = line_len.max(zpass.block * nz);
             max_units = max_units.max(zpass.units());
         }
-        let workers = MIN_WORKERS
+        let chunks = MIN_WORKERS
             .max(4 * rayon::current_num_threads())
             .min(max_units)
             .max(1);
-        let pool = (0..workers)
-            .map(|_| Worker {
-                real: vec![0.0; nx],
-                rows: vec![C64::default(); if fused { TILE * nxh } else { 0 }],
-                line: vec![C64::default(); line_len],
-                scratch: vec![C64::default(); scratch_len],
-            })
-            .collect();
+        let shape = WorkerShape {
+            nx,
+            rows: if fused { TILE * nxh } else { 0 },
+            line: line_len,
+            scratch: scratch_len,
+        };
+        let pool = Pool::per_thread(|| shape.make());
 
         let eng = Engine {
             nx,
@@ -487,6 +536,8 @@ impl FftEngine {
             ypass,
             zpass,
             fused,
+            shape,
+            chunks,
         };
         FftEngine { eng, pool }
     }
@@ -511,7 +562,7 @@ impl FftEngine {
     pub fn forward(&mut self, input: &[f64], out: &mut [C64]) {
         assert_eq!(input.len(), self.real_len(), "fft: input length");
         assert_eq!(out.len(), self.complex_len(), "fft: output length");
-        self.eng.forward(&mut self.pool, input, out);
+        self.eng.forward(&self.pool, input, out);
     }
 
     /// Inverse complex-to-real transform normalized by `1/(nx ny nz)`. With `src`, the
@@ -520,7 +571,7 @@ impl FftEngine {
     pub fn inverse(&mut self, src: Option<&[C64]>, work: &mut [C64], out: &mut [f64]) {
         assert_eq!(work.len(), self.complex_len(), "fft: input length");
         assert_eq!(out.len(), self.real_len(), "fft: output length");
-        self.eng.inverse(&mut self.pool, src, work, out);
+        self.eng.inverse(&self.pool, src, work, out);
     }
 }
 

@@ -13,7 +13,7 @@ use crate::io::plot::{Series, Style, line_chart};
 use crate::scene::{RemeshKernel, Scene, ValidScene};
 use crate::sim::engine::Simulation;
 use crate::solvers::Spectral;
-use crate::systems::transport::{LineScratch, sweep};
+use crate::systems::transport::{LinePool, LineScratch, sweep};
 use std::f64::consts::PI;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -1075,7 +1075,7 @@ fn remesh() -> Report {
             w[g.idx(i, j, 0)] = (1.0 + 0.3 * x - 0.2 * y) * (-(x * x + y * y) / 30.0).exp();
         }
     }
-    let mut pool: Vec<LineScratch> = (0..4).map(|_| LineScratch::new(n, 1)).collect();
+    let pool = LinePool::per_thread(|| LineScratch::new(n, 1));
     // Uniform velocity: every particle moves by d cells; Σω' = Σω, Σω'x' = Σωx + d Σω,
     // Σω'x'² = Σωx² + 2d Σωx + d² Σω.
     let m0 = moments(&g, &w);
@@ -1091,7 +1091,7 @@ fn remesh() -> Report {
         &ux,
         0.0,
         RemeshKernel::M4Prime,
-        &mut pool,
+        &pool,
     );
     sweep(
         &g,
@@ -1101,7 +1101,7 @@ fn remesh() -> Report {
         &uy,
         0.0,
         RemeshKernel::M4Prime,
-        &mut pool,
+        &pool,
     );
     let m1 = moments(&g, &omega[0]);
     let scale = m0[0].abs().max(1.0);
@@ -1158,7 +1158,7 @@ fn remesh() -> Report {
         &us,
         0.0,
         RemeshKernel::M4Prime,
-        &mut pool,
+        &pool,
     );
     sweep(
         &g,
@@ -1168,7 +1168,7 @@ fn remesh() -> Report {
         &us,
         0.0,
         RemeshKernel::M4Prime,
-        &mut pool,
+        &pool,
     );
     let m2 = moments(&g, &omega[0]);
     rep.rows.push(Row::abs(
