@@ -96,7 +96,7 @@ impl FreeSurfaceScratch {
     pub fn new(grid: &Grid) -> Self {
         let nmax = *grid.n.iter().max().unwrap_or(&1);
         FreeSurfaceScratch {
-            pool: LinePool::per_thread(|| LineScratch::new(nmax, 1)),
+            pool: LinePool::per_thread(move || LineScratch::new(nmax, 1)),
             phi0: vec![0.0; grid.len()],
             next: vec![0.0; grid.len()],
             partial: vec![[0.0; 2]; grid.len() / grid.n[0]],

@@ -58,7 +58,7 @@ impl TransportScratch {
     pub fn new(grid: &Grid) -> Self {
         let nmax = *grid.n.iter().max().unwrap_or(&1);
         let nc = grid.omega_components();
-        let pool = Pool::per_thread(|| LineScratch::new(nmax, nc));
+        let pool = Pool::per_thread(move || LineScratch::new(nmax, nc));
         TransportScratch {
             pool,
             reverse: false,
@@ -383,7 +383,6 @@ pub fn sweep(
     let cdt = dt / grid.h;
     let cut2 = cutoff * cutoff;
     let per = ngroups.div_ceil(CHUNKS);
-    let nmax = *grid.n.iter().max().unwrap_or(&1);
     #[cfg(target_arch = "x86_64")]
     let avx2 = std::arch::is_x86_feature_detected!("avx2");
     // One work unit: the groups of lines `chunk * per ..`.
@@ -418,7 +417,8 @@ pub fn sweep(
         };
         for group in lo..hi {
             let (base, count) = bases(group);
-            let next = (group + 1 < hi).then(|| bases(group + 1));
+            // Only the sweeps across x prefetch (see `Group::next`).
+            let next = (axis != 0 && group + 1 < hi).then(|| bases(group + 1));
             let group = Group {
                 n,
                 nc,
@@ -441,7 +441,7 @@ pub fn sweep(
     };
     (0..CHUNKS)
         .into_par_iter()
-        .for_each(|chunk| pool.with(|| LineScratch::new(nmax, nc), |s| sweep_chunk(chunk, s)));
+        .for_each(|chunk| pool.with(|s| sweep_chunk(chunk, s)));
 }
 
 /// One group of lines of a sweep: `count` real lines of `n` nodes whose first nodes are
@@ -453,9 +453,10 @@ struct Group<'a> {
     base: &'a [usize; LANES],
     stride: usize,
     contiguous: bool,
-    /// The next group's `base` and `count`, whose lines [`gather`] asks the cache for while
-    /// it copies this group (the lines of a sweep across x are strided and those along x are
-    /// `LANES` streams per array, too many for the hardware prefetcher).
+    /// In a sweep across x (`contiguous`), the next group's `base` and `count`, whose lines
+    /// [`gather`] asks the cache for while it copies this group: their nodes are a row or a
+    /// plane apart, which the hardware prefetcher does not follow. (Along x, prefetching the
+    /// next group's `LANES` rows measured slower; it is not done.)
     next: Option<(&'a [usize; LANES], usize)>,
 }
 
@@ -525,8 +526,9 @@ fn group_generic<const AVX2: bool>(
     }
 }
 
-/// Ask the cache for node `p` of the lines starting at `nb` (the next group, `ncount` lines):
-/// the velocity and vorticity there. A hint only: it changes no value.
+/// Ask the cache for node `p` of the `ncount` consecutive lines starting at `nb[0]` (the next
+/// group of a sweep across x): the velocity and vorticity there. A hint only: it changes no
+/// value.
 #[inline(always)]
 fn prefetch_row(
     g: &Group,
@@ -551,12 +553,11 @@ fn prefetch_row(
                 }
             }
         };
-        if g.contiguous {
-            let at = nb[0] + p * g.stride;
-            fetch(at);
-            fetch(at + 8);
-            fetch(at + ncount - 1);
-        }
+        debug_assert!(g.contiguous);
+        let at = nb[0] + p * g.stride;
+        fetch(at);
+        fetch(at + 8);
+        fetch(at + ncount - 1);
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (g, nb, ncount, p, u_axis, ptrs);

@@ -9,37 +9,30 @@
 
 use std::sync::Mutex;
 
-/// A pool of scratch items of type `T`.
+/// A pool of scratch items of type `T`, and how to make one.
 pub struct Pool<T> {
     items: Mutex<Vec<T>>,
+    make: Box<dyn Fn() -> T + Send + Sync>,
 }
 
 impl<T> Pool<T> {
-    /// One item per thread of the current rayon pool, each made by `make`.
-    pub fn per_thread(make: impl FnMut() -> T) -> Self {
+    /// One item per thread of the current rayon pool, each made by `make` (as are the items
+    /// made later, if more tasks run at once than there are items).
+    pub fn per_thread(make: impl Fn() -> T + Send + Sync + 'static) -> Self {
         let n = rayon::current_num_threads().max(1);
         Pool {
-            items: Mutex::new(std::iter::repeat_with(make).take(n).collect()),
+            items: Mutex::new(std::iter::repeat_with(&make).take(n).collect()),
+            make: Box::new(make),
         }
     }
 
-    /// Run `f` with an item of the pool (made by `make` if every item is in use).
-    pub fn with<R>(&self, make: impl FnOnce() -> T, f: impl FnOnce(&mut T) -> R) -> R {
+    /// Run `f` with an item of the pool.
+    pub fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> R {
         let taken = self.lock().pop();
-        let mut item = taken.unwrap_or_else(make);
+        let mut item = taken.unwrap_or_else(|| (self.make)());
         let r = f(&mut item);
         self.lock().push(item);
         r
-    }
-
-    /// Number of items the pool holds now (those in use are not counted).
-    pub fn len(&self) -> usize {
-        self.lock().len()
-    }
-
-    /// Whether the pool holds no item now.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Vec<T>> {

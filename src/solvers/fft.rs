@@ -70,26 +70,6 @@ pub fn wavenumber(m: usize, n: usize, len: f64) -> f64 {
 /// read together.
 const TILE: usize = 8;
 
-/// The sizes of a [`Worker`]'s buffers.
-#[derive(Clone, Copy, Debug)]
-struct WorkerShape {
-    nx: usize,
-    rows: usize,
-    line: usize,
-    scratch: usize,
-}
-
-impl WorkerShape {
-    fn make(self) -> Worker {
-        Worker {
-            real: vec![0.0; self.nx],
-            rows: vec![C64::default(); self.rows],
-            line: vec![C64::default(); self.line],
-            scratch: vec![C64::default(); self.scratch],
-        }
-    }
-}
-
 /// Scratch space of one task (the engine keeps one per thread, see [`Pool`]); every unit
 /// overwrites what it reads of it.
 struct Worker {
@@ -233,8 +213,6 @@ struct Engine {
     /// Whether the x and y transforms run fused, one z-plane per unit (3D with enough planes);
     /// otherwise x rows and y line bundles are separate passes.
     fused: bool,
-    /// The buffers of a worker.
-    shape: WorkerShape,
     /// Parallel chunks of a pass (a fixed number for the grid: only scheduling depends on it).
     chunks: usize,
 }
@@ -301,17 +279,14 @@ impl Engine {
         let units = pass.units();
         let nw = self.chunks;
         (0..nw).into_par_iter().for_each(|w| {
-            pool.with(
-                || self.shape.make(),
-                |wk| {
-                    for u in (w * units / nw)..((w + 1) * units / nw) {
-                        // SAFETY: units are disjoint and each is run by exactly one task;
-                        // `src` is either `data` (same unit, written only after being read) or
-                        // a separate buffer that is only read.
-                        unsafe { pass.run_unit(u, fft, wk, srcp, dst) };
-                    }
-                },
-            )
+            pool.with(|wk| {
+                for u in (w * units / nw)..((w + 1) * units / nw) {
+                    // SAFETY: units are disjoint and each is run by exactly one task;
+                    // `src` is either `data` (same unit, written only after being read) or
+                    // a separate buffer that is only read.
+                    unsafe { pass.run_unit(u, fft, wk, srcp, dst) };
+                }
+            })
         });
     }
 
@@ -374,14 +349,13 @@ impl Engine {
     /// Unnormalized forward transform of `input` into `out`.
     fn forward(&self, pool: &Pool<Worker>, input: &[f64], out: &mut [C64]) {
         let (nx, ny, nxh) = (self.nx, self.ny, self.nxh);
-        let make = || self.shape.make();
         if self.fused {
             let ppc = self.planes_per_chunk(self.chunks);
             input
                 .par_chunks(ppc * nx * ny)
                 .zip(out.par_chunks_mut(ppc * nxh * ny))
                 .for_each(|(inp, o)| {
-                    pool.with(make, |wk| {
+                    pool.with(|wk| {
                         for (pi, po) in inp.chunks_exact(nx * ny).zip(o.chunks_exact_mut(nxh * ny))
                         {
                             self.forward_plane(wk, pi, po);
@@ -396,7 +370,7 @@ impl Engine {
                 .par_chunks(rpc * nx)
                 .zip(out.par_chunks_mut(rpc * nxh))
                 .for_each(|(inp, o)| {
-                    pool.with(make, |wk| {
+                    pool.with(|wk| {
                         for (ri, ro) in inp.chunks_exact(nx).zip(o.chunks_exact_mut(nxh)) {
                             wk.real.copy_from_slice(ri);
                             check(r2c.process_with_scratch(
@@ -434,16 +408,11 @@ impl Engine {
             work.par_chunks(ppc * nxh * ny)
                 .zip(out.par_chunks_mut(ppc * nx * ny))
                 .for_each(|(wi, o)| {
-                    pool.with(
-                        || self.shape.make(),
-                        |wk| {
-                            for (pi, po) in
-                                wi.chunks_exact(nxh * ny).zip(o.chunks_exact_mut(nx * ny))
-                            {
-                                self.inverse_plane(wk, pi, po, scale);
-                            }
-                        },
-                    )
+                    pool.with(|wk| {
+                        for (pi, po) in wi.chunks_exact(nxh * ny).zip(o.chunks_exact_mut(nx * ny)) {
+                            self.inverse_plane(wk, pi, po, scale);
+                        }
+                    })
                 });
             return;
         }
@@ -452,14 +421,11 @@ impl Engine {
         work.par_chunks_mut(rpc * nxh)
             .zip(out.par_chunks_mut(rpc * nx))
             .for_each(|(wi, o)| {
-                pool.with(
-                    || self.shape.make(),
-                    |wk| {
-                        for (ri, ro) in wi.chunks_exact_mut(nxh).zip(o.chunks_exact_mut(nx)) {
-                            self.c2r_row(ri, ro, &mut wk.scratch, scale);
-                        }
-                    },
-                )
+                pool.with(|wk| {
+                    for (ri, ro) in wi.chunks_exact_mut(nxh).zip(o.chunks_exact_mut(nx)) {
+                        self.c2r_row(ri, ro, &mut wk.scratch, scale);
+                    }
+                })
             });
     }
 }
@@ -515,13 +481,13 @@ impl FftEngine {
             .max(4 * rayon::current_num_threads())
             .min(max_units)
             .max(1);
-        let shape = WorkerShape {
-            nx,
-            rows: if fused { TILE * nxh } else { 0 },
-            line: line_len,
-            scratch: scratch_len,
-        };
-        let pool = Pool::per_thread(|| shape.make());
+        let rows_len = if fused { TILE * nxh } else { 0 };
+        let pool = Pool::per_thread(move || Worker {
+            real: vec![0.0; nx],
+            rows: vec![C64::default(); rows_len],
+            line: vec![C64::default(); line_len],
+            scratch: vec![C64::default(); scratch_len],
+        });
 
         let eng = Engine {
             nx,
@@ -536,7 +502,6 @@ impl FftEngine {
             ypass,
             zpass,
             fused,
-            shape,
             chunks,
         };
         FftEngine { eng, pool }

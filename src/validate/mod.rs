@@ -1075,7 +1075,7 @@ fn remesh() -> Report {
             w[g.idx(i, j, 0)] = (1.0 + 0.3 * x - 0.2 * y) * (-(x * x + y * y) / 30.0).exp();
         }
     }
-    let pool = LinePool::per_thread(|| LineScratch::new(n, 1));
+    let pool = LinePool::per_thread(move || LineScratch::new(n, 1));
     // Uniform velocity: every particle moves by d cells; Σω' = Σω, Σω'x' = Σωx + d Σω,
     // Σω'x'² = Σωx² + 2d Σωx + d² Σω.
     let m0 = moments(&g, &w);
