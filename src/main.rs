@@ -73,7 +73,8 @@ enum Command {
         #[arg(long)]
         list: bool,
         /// Write the results as Markdown to FILE (e.g. docs/validation.md): every case's rows,
-        /// the date, the machine and the wall time.
+        /// the date, the machine, the wall time and the cases not run. FILE must be new or a
+        /// page this option wrote; any other file is refused (exit status 2) before the run.
         #[arg(long, value_name = "FILE")]
         write_docs: Option<PathBuf>,
         /// Write the PNG plots (measured curves over their references) to DIR, as
@@ -280,6 +281,13 @@ fn main() -> ExitCode {
             }
             if cases.is_empty() {
                 selected = CASES.iter().collect();
+            }
+            // Refuse before the (possibly hours-long) run, not after it.
+            if let Some(file) = &write_docs
+                && let Err(e) = tumble::validate::docs::may_write(file)
+            {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
             }
             let start = std::time::Instant::now();
             let mut reports = Vec::new();

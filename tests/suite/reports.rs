@@ -1,7 +1,7 @@
 //! The validation reports' helpers: the three-grid Richardson extrapolation and the Markdown
 //! status page.
 
-use tumble::validate::docs::{markdown, utc_date};
+use tumble::validate::docs::{markdown, may_write, utc_date};
 use tumble::validate::{Report, Row, richardson_observed};
 
 #[test]
@@ -49,6 +49,33 @@ fn a_failing_row_and_a_failed_run_show_as_fail_with_their_numbers() {
     );
     assert!(page.contains("- date: 2026-01-02"), "{page}");
     assert!(page.contains("- result: 0 passed, 2 failed"), "{page}");
+    // A run of two cases says which it did not run, so it cannot pass for the whole tier.
+    let not_run = page
+        .lines()
+        .find(|l| l.starts_with("**Not run**"))
+        .unwrap_or_else(|| panic!("no 'Not run' line: {page}"));
+    assert!(
+        not_run.contains("`poisson`") && not_run.contains("`cup`"),
+        "{not_run}"
+    );
+    assert!(!not_run.contains("`dkt`"), "{not_run}");
+}
+
+#[test]
+fn write_docs_replaces_only_its_own_pages() {
+    let dir = std::env::temp_dir().join(format!("tumble-docs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let missing = dir.join("new.md");
+    assert!(may_write(&missing).is_ok());
+    let own = dir.join("validation.md");
+    std::fs::write(&own, markdown(&[], true, "2026-01-02", "nproc 2", 1.0)).unwrap();
+    assert!(may_write(&own).is_ok());
+    let users = dir.join("notes.md");
+    std::fs::write(&users, "# My notes\n").unwrap();
+    let err = may_write(&users).unwrap_err();
+    assert!(err.contains("refusing"), "{err}");
+    assert_eq!(std::fs::read_to_string(&users).unwrap(), "# My notes\n");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
