@@ -28,10 +28,15 @@ const TITLE: &str = "# Validation status (";
 /// wrote (it starts with the page's title). Anything else is refused, so a mistyped path never
 /// replaces a file of the user's.
 pub fn may_write(path: &std::path::Path) -> Result<(), String> {
-    match std::fs::read(path) {
+    use std::io::Read;
+    // Only the title's length is read, whatever the file's size.
+    let mut head = Vec::with_capacity(TITLE.len());
+    let read =
+        std::fs::File::open(path).and_then(|f| f.take(TITLE.len() as u64).read_to_end(&mut head));
+    match read {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
         Err(e) => Err(format!("cannot read {}: {e}", path.display())),
-        Ok(bytes) if bytes.starts_with(TITLE.as_bytes()) => Ok(()),
+        Ok(_) if head == TITLE.as_bytes() => Ok(()),
         Ok(_) => Err(format!(
             "{} exists and was not written by `tumble validate --write-docs` (it does not start \
              with \"{TITLE}\"); refusing to replace it",

@@ -673,3 +673,52 @@ fn full_disk_names_the_file_and_fails() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn validate_write_docs_refuses_a_file_it_did_not_write() {
+    let d = tmp("write-docs");
+    let notes = d.join("notes.md");
+    std::fs::write(&notes, "# My notes\n").unwrap();
+    let st = tumble()
+        .args([
+            "validate",
+            "lamb-oseen",
+            "--write-docs",
+            notes.to_str().unwrap(),
+        ])
+        .current_dir(&d)
+        .output()
+        .unwrap();
+    assert_eq!(
+        st.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&st.stdout)
+    );
+    assert!(String::from_utf8_lossy(&st.stderr).contains("refusing"));
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "# My notes\n");
+    // Refused before the run: lamb-oseen, which draws a plot, did not run.
+    assert!(!d.join("validation").exists());
+    // A new file is written, with the cases it did not run.
+    let page = d.join("page.md");
+    let st = tumble()
+        .args(["validate", "remesh", "--write-docs", page.to_str().unwrap()])
+        .current_dir(&d)
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let text = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        text.starts_with("# Validation status (full tier)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("**Not run**") && text.contains("`poisson`"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -74,7 +74,10 @@ fn write_docs_replaces_only_its_own_pages() {
     std::fs::write(&users, "# My notes\n").unwrap();
     let err = may_write(&users).unwrap_err();
     assert!(err.contains("refusing"), "{err}");
-    assert_eq!(std::fs::read_to_string(&users).unwrap(), "# My notes\n");
+    // A file shorter than the title is not a page either.
+    let short = dir.join("short.md");
+    std::fs::write(&short, "# Valid").unwrap();
+    assert!(may_write(&short).is_err());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
