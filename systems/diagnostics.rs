@@ -21,6 +21,7 @@
 use crate::base::fields::{Fields, Params, Sample, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::TimeStep;
+use crate::bodies::{Body, BodyShape, RigidState};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -36,6 +37,9 @@ pub struct Diagnostics {
     pub failure: Option<String>,
     /// Fallback step when nothing else bounds dt (fluid at rest, no dt_max).
     pub dt_fallback: f64,
+    /// The largest speed of a point of a dynamic body, |V| + |Ω| R with R the radius of the
+    /// sphere of the body's volume, after the last step (0 without dynamic bodies).
+    pub body_speed: f64,
     rows: Vec<RowStats>,
 }
 
@@ -47,7 +51,19 @@ struct RowStats {
     wmax2: f64,
     wmax_at: usize,
     umax2: f64,
+    umax_at: usize,
     nan_at: Option<usize>,
+}
+
+/// Where the extremes of a measured state are (grid node indices).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Extremes {
+    /// The first node whose velocity or vorticity is not finite.
+    pub nan_at: Option<usize>,
+    /// The node of max|ω|.
+    pub omega_at: usize,
+    /// The node of max|u|.
+    pub u_at: usize,
 }
 
 impl Diagnostics {
@@ -58,12 +74,13 @@ impl Diagnostics {
             omega0: 0.0,
             failure: None,
             dt_fallback,
+            body_speed: 0.0,
             rows: vec![RowStats::default(); grid.n[1] * grid.n[2]],
         }
     }
 
-    /// Measure the fields; returns the sample and (first non-finite node, node of max|ω|).
-    pub fn measure(&mut self, grid: &Grid, fields: &Fields) -> (Sample, Option<usize>, usize) {
+    /// Measure the fields; returns the sample and where its extremes are.
+    pub fn measure(&mut self, grid: &Grid, fields: &Fields) -> (Sample, Extremes) {
         let nx = grid.n[0];
         let omega = fields.omega();
         let u = &fields.u;
@@ -88,7 +105,10 @@ impl Diagnostics {
                     s.wmax2 = w2;
                     s.wmax_at = i;
                 }
-                s.umax2 = s.umax2.max(u2);
+                if u2 > s.umax2 {
+                    s.umax2 = u2;
+                    s.umax_at = i;
+                }
             }
             *st = s;
         });
@@ -103,7 +123,10 @@ impl Diagnostics {
                 tot.wmax2 = s.wmax2;
                 tot.wmax_at = s.wmax_at;
             }
-            tot.umax2 = tot.umax2.max(s.umax2);
+            if s.umax2 > tot.umax2 {
+                tot.umax2 = s.umax2;
+                tot.umax_at = s.umax_at;
+            }
             if tot.nan_at.is_none() {
                 tot.nan_at = s.nan_at;
             }
@@ -124,21 +147,57 @@ impl Diagnostics {
             max_omega: tot.wmax2.sqrt(),
             max_u: tot.umax2.sqrt(),
         };
-        (sample, tot.nan_at, tot.wmax_at)
+        let at = Extremes {
+            nan_at: tot.nan_at,
+            omega_at: tot.wmax_at,
+            u_at: tot.umax_at,
+        };
+        (sample, at)
+    }
+}
+
+/// What bounds an adaptive step besides the sampled flow.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepBounds {
+    /// ν/h² when the scene has bodies (for the diffusion-number bound), else 0.
+    pub viscous: f64,
+    /// √(|g|/h) with a free surface (dt ≤ c / wave), else 0.
+    pub wave: f64,
+    /// √(a/h), a the largest acceleration gravity gives a dynamic body (see
+    /// [`Params::body_gravity_rate`]), else 0: in dt = c / rate a body starting the step at
+    /// rest moves at most ½ c² h.
+    pub body_gravity: f64,
+    /// The fastest dynamic body's speed (dt ≤ cfl h / speed), else 0.
+    pub body_speed: f64,
+}
+
+impl StepBounds {
+    /// The bounds of `params` on spacing `h`, with dynamic bodies whose fastest point moves
+    /// at `body_speed`.
+    pub fn new(params: &Params, h: f64, body_speed: f64) -> Self {
+        StepBounds {
+            viscous: params.viscous_rate(h),
+            wave: params.wave_rate(h),
+            body_gravity: params.body_gravity_rate(h),
+            body_speed,
+        }
     }
 }
 
 /// The step the policy allows for this state, before landing on the next stop time.
-/// `viscous` is ν/h² when the scene has bodies (for the diffusion-number bound), else 0;
-/// `wave` is √(|g|/h) with a free surface (dt ≤ c / wave), else 0.
 pub fn allowed_dt(
     policy: &TimeStep,
     sample: &Sample,
     h: f64,
     fallback: f64,
-    viscous: f64,
-    wave: f64,
+    bounds: StepBounds,
 ) -> f64 {
+    let StepBounds {
+        viscous,
+        wave,
+        body_gravity,
+        body_speed,
+    } = bounds;
     match *policy {
         TimeStep::Fixed(dt) => dt,
         TimeStep::Adaptive {
@@ -156,6 +215,12 @@ pub fn allowed_dt(
             }
             if wave > 0.0 {
                 dt = dt.min(c / wave);
+            }
+            if body_gravity > 0.0 {
+                dt = dt.min(c / body_gravity);
+            }
+            if body_speed > 0.0 {
+                dt = dt.min(cfl * h / body_speed);
             }
             if let Some(m) = dt_max {
                 dt = dt.min(m);
@@ -176,17 +241,12 @@ pub fn next_dt(
     sample: &Sample,
     h: f64,
     fallback: f64,
+    body_speed: f64,
     t: f64,
     stop_at: Option<f64>,
 ) -> f64 {
-    let dt = allowed_dt(
-        &params.dt_policy,
-        sample,
-        h,
-        fallback,
-        params.viscous_rate(h),
-        params.wave_rate(h),
-    );
+    let bounds = StepBounds::new(params, h, body_speed);
+    let dt = allowed_dt(&params.dt_policy, sample, h, fallback, bounds);
     if params.dt_policy.lands_on_outputs() {
         land_on(t, dt, stop_at)
     } else {
@@ -218,7 +278,11 @@ pub fn land_on(t: f64, dt: f64, stop_at: Option<f64>) -> f64 {
     }
 }
 
-fn place(grid: &Grid, idx: usize) -> String {
+/// The bodies, for the blow-up messages and the bodies' speed.
+type Bodies<'w, 's> = Query<'w, 's, (&'static Body, &'static BodyShape, &'static RigidState)>;
+
+/// The grid node `idx` as indices and position.
+fn node(grid: &Grid, idx: usize) -> String {
     let [nx, ny, _] = grid.n;
     let (i, j, k) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
     let p = grid.pos(i, j, k);
@@ -232,25 +296,79 @@ fn place(grid: &Grid, idx: usize) -> String {
     }
 }
 
+/// The grid node `idx`, and the nearest body's surface with the distance to it in cells.
+fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
+    let [nx, ny, _] = grid.n;
+    let (i, j, k) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
+    let p = grid.pos(i, j, k);
+    let x = glam::DVec3::new(p[0], p[1], if grid.dim == 2 { 0.0 } else { p[2] });
+    let nearest = bodies
+        .iter()
+        .map(|(b, shape, st)| {
+            let local = st.orientation.inverse() * (x - st.center);
+            (b, shape.level_set.phi(local))
+        })
+        .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
+    let at = node(grid, idx);
+    match nearest {
+        Some((b, phi)) => {
+            let side = if phi > 0.0 { "inside" } else { "outside" };
+            format!(
+                "{at}, {:.1} cells {side} the surface of body `{}`",
+                phi.abs() / grid.h,
+                b.name
+            )
+        }
+        None => at,
+    }
+}
+
+/// The largest speed of a point of a dynamic body: |V| + |Ω| R, R the radius of the sphere
+/// (disk in 2D) of the body's volume.
+fn body_speed(grid: &Grid, bodies: &Bodies) -> f64 {
+    bodies
+        .iter()
+        .filter(|(b, _, _)| b.is_dynamic())
+        .map(|(_, _, st)| {
+            let r = if grid.dim == 2 {
+                (st.volume / std::f64::consts::PI).sqrt()
+            } else {
+                (3.0 * st.volume / (4.0 * std::f64::consts::PI)).cbrt()
+            };
+            st.velocity.length() + st.angular_velocity.length() * r
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Measure the initial state and choose the first step (run once before the first step).
 pub fn diagnostics_init(
     grid: Res<Grid>,
     params: Res<Params>,
     fields: Res<Fields>,
+    bodies: Bodies,
     mut time: ResMut<SimTime>,
     mut diag: ResMut<Diagnostics>,
 ) {
-    let (mut s, nan_at, _) = diag.measure(&grid, &fields);
+    let (mut s, at) = diag.measure(&grid, &fields);
     s.t = time.t;
     diag.omega0 = s.max_omega;
-    if let Some(i) = nan_at {
+    if let Some(i) = at.nan_at {
         diag.failure = Some(format!(
             "the initial fields are not finite at {}",
-            place(&grid, i)
+            place(&grid, i, &bodies)
         ));
     }
     diag.sample = s;
-    time.dt = next_dt(&params, &s, grid.h, diag.dt_fallback, time.t, time.stop_at);
+    diag.body_speed = body_speed(&grid, &bodies);
+    time.dt = next_dt(
+        &params,
+        &s,
+        grid.h,
+        diag.dt_fallback,
+        diag.body_speed,
+        time.t,
+        time.stop_at,
+    );
 }
 
 /// For a flow that starts at rest (`omega0` = 0) under gravity: √blowup_factor times the speed
@@ -274,38 +392,43 @@ pub fn diagnostics(
     grid: Res<Grid>,
     params: Res<Params>,
     fields: Res<Fields>,
+    bodies: Bodies,
     mut time: ResMut<SimTime>,
     mut diag: ResMut<Diagnostics>,
 ) {
     time.t += time.dt;
     time.step += 1;
     // Fields no system changed since the last measure (a vacuum run's) measure the same.
-    let (mut s, nan_at, wmax_at) = if fields.is_changed() {
+    let (mut s, at) = if fields.is_changed() {
         diag.measure(&grid, &fields)
     } else {
-        (diag.sample, None, 0)
+        (diag.sample, Extremes::default())
     };
     s.t = time.t;
     s.dt = time.dt;
     let step = time.step;
-    if let Some(i) = nan_at {
+    if let Some(i) = at.nan_at {
         diag.failure = Some(format!(
             "blow-up: the velocity or vorticity is not finite at {} after step {step} (t = {:.6})",
-            place(&grid, i),
+            place(&grid, i, &bodies),
             time.t
         ));
     } else if let Some(limit) = rest_speed_limit(&grid, &params, diag.omega0)
         && s.max_u > limit
     {
         diag.failure = Some(format!(
-            "blow-up: max|u| = {:.4e} after step {step} (t = {:.6}) exceeds {limit:.4e}, √blowup_factor times the speed of a free fall across the box (a flow that starts at rest and is driven by gravity cannot get there); reduce the time step (numerics.dt) or refine the grid",
-            s.max_u, time.t
+            "blow-up: max|u| = {:.4e} at {} after step {step} (t = {:.6}) exceeds {limit:.4e}, √blowup_factor times the speed of a free fall across the box (a flow that starts at rest and is driven by gravity cannot get there); max|ω| = {:.4e} at {}; reduce the time step (numerics.dt) or refine the grid",
+            s.max_u,
+            place(&grid, at.u_at, &bodies),
+            time.t,
+            s.max_omega,
+            place(&grid, at.omega_at, &bodies),
         ));
     } else if diag.omega0 > 0.0 && s.max_omega > params.blowup_factor * diag.omega0 {
         diag.failure = Some(format!(
             "blow-up: max|ω| = {:.4e} at {} after step {step} (t = {:.6}) exceeds {} times its initial value {:.4e}; reduce the time step (numerics.dt) or refine the grid",
             s.max_omega,
-            place(&grid, wmax_at),
+            place(&grid, at.omega_at, &bodies),
             time.t,
             params.blowup_factor,
             diag.omega0
@@ -314,13 +437,23 @@ pub fn diagnostics(
         && s.max_u * dt / grid.h > 20.0
     {
         diag.failure = Some(format!(
-            "blow-up: max|u| dt / h = {:.1} after step {step} (t = {:.6}), far beyond the CFL limit; use a smaller fixed dt or an Adaptive step",
+            "blow-up: max|u| dt / h = {:.1} at {} after step {step} (t = {:.6}), far beyond the CFL limit; use a smaller fixed dt or an Adaptive step",
             s.max_u * dt / grid.h,
+            place(&grid, at.u_at, &bodies),
             time.t
         ));
     }
     diag.sample = s;
-    time.dt = next_dt(&params, &s, grid.h, diag.dt_fallback, time.t, time.stop_at);
+    diag.body_speed = body_speed(&grid, &bodies);
+    time.dt = next_dt(
+        &params,
+        &s,
+        grid.h,
+        diag.dt_fallback,
+        diag.body_speed,
+        time.t,
+        time.stop_at,
+    );
 }
 
 /// Clock, time step and global quantities: the first dt at startup, then every step.

@@ -87,7 +87,7 @@ pub fn transport(
 ) {
     let dt = time.dt;
     let fields = &mut *fields;
-    let max_omega = max_norm(fields.omega());
+    let max_omega = crate::solvers::max_norm(fields.omega());
     let cutoff = params.remesh_cutoff * max_omega;
     let scratch = &mut *scratch;
     let a = if params.midpoint_velocity && fields.dt_prev > 0.0 {
@@ -135,17 +135,6 @@ pub fn transport(
         stretch(&grid, dt, omega, u);
     }
     scratch.reverse = !scratch.reverse;
-}
-
-/// max over nodes of |ω| (Euclidean norm in 3D).
-pub fn max_norm(omega: &[Vec<f64>]) -> f64 {
-    let n = omega[0].len();
-    (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| omega.iter().map(|c| c[i] * c[i]).sum::<f64>())
-        .reduce(|| 0.0, f64::max)
-        .sqrt()
 }
 
 /// Half-width of the stretching's centred difference stencil.

@@ -14,7 +14,7 @@ use tumble::base::grid::Grid;
 mod common;
 use common::Rng;
 use tumble::solvers::fft::C64;
-use tumble::solvers::operators::Spectral;
+use tumble::solvers::operators::{Spectral, TopDamping};
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting: only threads marked through `MARK` (the workers of a dedicated rayon pool
@@ -82,7 +82,7 @@ fn no_allocation_after_new() {
         let mut step = |sp: &mut Spectral, v: u64| {
             sp.forward(&omega[0], &mut hat);
             sp.inverse(&mut hat, &mut back);
-            sp.diffuse(&mut omega, 0.01, v);
+            sp.diffuse(&mut omega, 0.01, TopDamping::NONE, v);
             sp.velocity(&mut omega, v, [0.0; 3], &mut u);
             sp.velocity(&mut omega, v + 100, [0.0; 3], &mut u);
         };

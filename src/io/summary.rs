@@ -43,7 +43,7 @@ fn vector(v: &[f64]) -> String {
 }
 
 /// The time step policy in words.
-pub fn time_step_words(dt: &TimeStep, has_bodies: bool) -> String {
+pub fn time_step_words(dt: &TimeStep, has_bodies: bool, dynamic_bodies: bool) -> String {
     match dt {
         TimeStep::Fixed(dt) => format!("fixed, dt = {dt}"),
         TimeStep::Adaptive {
@@ -59,6 +59,13 @@ pub fn time_step_words(dt: &TimeStep, has_bodies: bool) -> String {
             let _ = write!(s, ", and max|u| dt / h at most {cfl}");
             if has_bodies {
                 let _ = write!(s, ", and nu dt / h^2 at most {diffusion_number}");
+            }
+            if dynamic_bodies {
+                let _ = write!(
+                    s,
+                    ", and a dynamic body starting a step at rest moves at most {} h under gravity, and max body speed dt / h at most {cfl}",
+                    sig4(0.5 * c * c)
+                );
             }
             s
         }
@@ -240,9 +247,24 @@ pub fn describe(scene: &ValidScene) -> String {
     let _ = writeln!(
         s,
         "  time step: {}; end time {}",
-        time_step_words(&scene.numerics.dt, !scene.bodies.is_empty()),
+        time_step_words(
+            &scene.numerics.dt,
+            !scene.bodies.is_empty(),
+            scene
+                .bodies
+                .iter()
+                .any(|b| matches!(b.kind, crate::scene::BodyKind::Dynamic)),
+        ),
         scene.numerics.end_time
     );
+    if scene.dim() == 3 && !scene.vacuum {
+        use crate::systems::diffusion::{ORDER, SMAGORINSKY};
+        let _ = writeln!(
+            s,
+            "  grid-scale dissipation (3D): the top of the spectrum damped at the rate C_s^2 pi^2 max|vorticity| (|k|/k_N)^{}, C_s = {SMAGORINSKY} (systems/diffusion.rs)",
+            2 * ORDER
+        );
+    }
     if !scene.initial.is_empty() {
         let mut kinds: BTreeMap<String, usize> = BTreeMap::new();
         for i in &scene.initial {

@@ -158,13 +158,14 @@ impl Simulation {
     pub fn set_stop_at(&mut self, t: Option<f64>) {
         let h = self.grid().h;
         let diag = self.world.resource::<Diagnostics>();
-        let (sample, fallback) = (diag.sample, diag.dt_fallback);
+        let (sample, fallback, body_speed) = (diag.sample, diag.dt_fallback, diag.body_speed);
         let now = self.time();
         let dt = crate::systems::diagnostics::next_dt(
             self.world.resource::<Params>(),
             &sample,
             h,
             fallback,
+            body_speed,
             now,
             t,
         );

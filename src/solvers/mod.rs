@@ -7,4 +7,4 @@ pub mod multigrid;
 pub mod operators;
 pub mod variable_poisson;
 
-pub use operators::Spectral;
+pub use operators::{Spectral, TopDamping, max_norm};

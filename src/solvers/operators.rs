@@ -8,6 +8,18 @@ use crate::base::grid::Grid;
 use crate::solvers::fft::{C64, FftEngine, wavenumber};
 use rayon::prelude::*;
 
+/// max over nodes of |ω| (the Euclidean norm of the components at a node); a maximum, so it
+/// does not depend on the thread count.
+pub fn max_norm(omega: &[Vec<f64>]) -> f64 {
+    let n = omega[0].len();
+    (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| omega.iter().map(|c| c[i] * c[i]).sum::<f64>())
+        .reduce(|| 0.0, f64::max)
+        .sqrt()
+}
+
 /// Wavenumber tables.
 struct Tables {
     /// Spectral wavenumbers per axis (x: `0..=nx/2`; y, z: signed); z is `[0]` in 2D.
@@ -66,6 +78,30 @@ pub struct Spectral {
     work: Vec<C64>,
     /// Version `omega_hat` corresponds to.
     cached: Option<u64>,
+    /// The Nyquist wavenumber of one axis, π/h.
+    k_nyquist: f64,
+    /// Per row of the spectrum: the kinetic energy the last damped diffusion removed (summed
+    /// in row order afterwards, so the total does not depend on the thread count).
+    removed_rows: Vec<f64>,
+}
+
+/// The damping of the top of the spectrum that [`Spectral::diffuse`] applies with the
+/// diffusion: every mode is multiplied by exp(-`strength` (|k|/k_N)^(2`order`)), with k_N = π/h
+/// the Nyquist wavenumber of one axis. `strength` is the rate at |k| = k_N times the step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TopDamping {
+    /// Rate at |k| = k_N times the time step (dimensionless); 0 switches the damping off.
+    pub strength: f64,
+    /// Half the power of |k|/k_N (the damping grows like |k|^(2 order)).
+    pub order: i32,
+}
+
+impl TopDamping {
+    /// No damping.
+    pub const NONE: TopDamping = TopDamping {
+        strength: 0.0,
+        order: 1,
+    };
 }
 
 impl Spectral {
@@ -85,6 +121,8 @@ impl Spectral {
             omega_hat: (0..ncomp).map(|_| vec![C64::default(); clen]).collect(),
             work: vec![C64::default(); clen],
             cached: None,
+            k_nyquist: std::f64::consts::PI / grid.h,
+            removed_rows: vec![0.0; clen / nxh],
         }
     }
 
@@ -191,39 +229,86 @@ impl Spectral {
         }
     }
 
-    /// Multiplies the cached spectrum by `1/(1 + nu_dt |k|^2)` (skipped when `nu_dt == 0`) and,
-    /// in 3D, removes its divergence.
-    fn filter_omega(&mut self, nu_dt: f64) {
-        let ([_, ny, _], nxh) = self.fft.dims();
+    /// Multiplies the cached spectrum by `1/(1 + nu_dt |k|^2)` and by the top damping's
+    /// factor (each skipped when zero) and, in 3D, removes its divergence. Returns the kinetic
+    /// energy per unit volume the damping removed (0 without damping).
+    fn filter_omega(&mut self, nu_dt: f64, damp: TopDamping) -> f64 {
+        let ([nx, ny, _], nxh) = self.fft.dims();
         let [lx, ly, lz] = &self.tab.k2;
         let [kx, ky, kz] = &self.tab.kd;
         let diffuse = nu_dt != 0.0;
+        let damped = damp.strength != 0.0;
+        if !diffuse && !damped && self.omega_hat.len() == 1 {
+            return 0.0;
+        }
+        let kn2 = self.k_nyquist * self.k_nyquist;
+        // The factor of a mode of |k|^2 = l: the implicit diffusion and the damping.
+        let factor = |l: f64| -> (f64, f64) {
+            let fd = if diffuse {
+                1.0 / (1.0 + nu_dt * l)
+            } else {
+                1.0
+            };
+            let fs = if damped {
+                (-damp.strength * (l / kn2).powi(damp.order)).exp()
+            } else {
+                1.0
+            };
+            (fd, fs)
+        };
+        // The energy the damping factor fs takes from a divergence-free mode of vorticity
+        // |w|^2, |k|^2 = l and |k_d|^2 = kd2 (the first-derivative wavenumbers, Nyquist
+        // components 0): the velocity solve makes |u_hat|^2 = |k_d x w|^2 / l^2 =
+        // kd2 |w|^2 / l^2, of which 1 - fs^2 goes.
+        let mode_energy = |w2: f64, kd2: f64, l: f64, fs: f64| kd2 * w2 / (l * l) * (1.0 - fs * fs);
+        // Modes of the half spectrum stand for themselves and their conjugates, except the
+        // x index 0 and (even nx) nx/2.
+        let weight = |i: usize| if i == 0 || 2 * i == nx { 1.0 } else { 2.0 };
+        // Energy per unit volume of a velocity mode: 1/2 |u_hat|^2 / N^2.
+        let n_total = self.fft.real_len() as f64;
+        let e_norm = 0.5 / (n_total * n_total);
+        let removed = &mut self.removed_rows;
         match &mut self.omega_hat[..] {
             [w] => {
-                if !diffuse {
-                    return;
-                }
-                w.par_chunks_mut(nxh).enumerate().for_each(|(r, row)| {
-                    let lyz = ly[r % ny] + lz[r / ny];
-                    for (v, &l) in row.iter_mut().zip(lx) {
-                        *v *= 1.0 / (1.0 + nu_dt * (l + lyz));
-                    }
-                });
+                w.par_chunks_mut(nxh)
+                    .zip(removed.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(r, (row, out))| {
+                        let lyz = ly[r % ny] + lz[r / ny];
+                        let kyz2 = ky[r % ny] * ky[r % ny];
+                        let mut sum = 0.0;
+                        for (i, (v, &lxi)) in row.iter_mut().zip(lx).enumerate() {
+                            let l = lxi + lyz;
+                            let (fd, fs) = factor(l);
+                            *v *= fd;
+                            if damped {
+                                if l > 0.0 {
+                                    let kd2 = kx[i] * kx[i] + kyz2;
+                                    sum += weight(i) * mode_energy(v.norm_sqr(), kd2, l, fs);
+                                }
+                                *v *= fs;
+                            }
+                        }
+                        *out = sum;
+                    });
             }
             [a, b, c] => {
                 a.par_chunks_mut(nxh)
                     .zip(b.par_chunks_mut(nxh))
                     .zip(c.par_chunks_mut(nxh))
+                    .zip(removed.par_iter_mut())
                     .enumerate()
-                    .for_each(|(r, ((ra, rb), rc))| {
+                    .for_each(|(r, (((ra, rb), rc), out))| {
                         let (j, k) = (r % ny, r / ny);
                         let lyz = ly[j] + lz[k];
                         let (kyj, kzk) = (ky[j], kz[k]);
+                        let mut sum = 0.0;
                         for i in 0..nxh {
                             let mut w = [ra[i], rb[i], rc[i]];
+                            let l = lx[i] + lyz;
+                            let (fd, fs) = factor(l);
                             if diffuse {
-                                let f = 1.0 / (1.0 + nu_dt * (lx[i] + lyz));
-                                w = w.map(|v| v * f);
+                                w = w.map(|v| v * fd);
                             }
                             let kv = [kx[i], kyj, kzk];
                             let k2 = kv[0] * kv[0] + kv[1] * kv[1] + kv[2] * kv[2];
@@ -233,13 +318,26 @@ impl Spectral {
                                     w[a] -= d * kv[a];
                                 }
                             }
+                            if damped {
+                                if l > 0.0 {
+                                    let w2 = w[0].norm_sqr() + w[1].norm_sqr() + w[2].norm_sqr();
+                                    sum += weight(i) * mode_energy(w2, k2, l, fs);
+                                }
+                                w = w.map(|v| v * fs);
+                            }
                             ra[i] = w[0];
                             rb[i] = w[1];
                             rc[i] = w[2];
                         }
+                        *out = sum;
                     });
             }
             _ => unreachable!("omega_hat has 1 or 3 components"),
+        }
+        if damped {
+            e_norm * self.removed_rows.iter().sum::<f64>()
+        } else {
+            0.0
         }
     }
 
@@ -248,19 +346,30 @@ impl Spectral {
     /// `omega` has 1 component (2D, scalar) or 3 (3D), each `grid.len()` long. Every component
     /// is forward-transformed and multiplied by `1/(1 + nu_dt |k|^2)`, with the spectral
     /// wavenumbers (Nyquist included): implicit Euler, `(I - nu dt Lap) omega_new = omega`, with
-    /// the periodic grid's spectral Laplacian, the operator the velocity solve inverts. In 3D
+    /// the periodic grid's spectral Laplacian, the operator the velocity solve inverts, and by
+    /// the factor of `damp` (see [`TopDamping`]). In 3D
     /// the divergence is then removed,
     /// `w_hat -= k (k . w_hat) / |k|^2`, with spectral `k` whose Nyquist components are 0
     /// (modes whose such `k` vanishes, among them `k = 0`, are untouched). The result is
     /// transformed back into `omega` and its spectrum stays cached as version `version`.
+    /// Returns the kinetic energy per unit volume the damping removed, ½⟨|u|²⟩ of the velocity
+    /// the diffused vorticity would have had without it minus that of the result (0 when
+    /// `damp.strength` is 0).
     ///
     /// Panics if `omega` has the wrong shape.
-    pub fn diffuse(&mut self, omega: &mut [Vec<f64>], nu_dt: f64, version: u64) {
+    pub fn diffuse(
+        &mut self,
+        omega: &mut [Vec<f64>],
+        nu_dt: f64,
+        damp: TopDamping,
+        version: u64,
+    ) -> f64 {
         self.check_field(omega, self.omega_hat.len(), "omega");
         self.load_omega(omega);
-        self.filter_omega(nu_dt);
+        let removed = self.filter_omega(nu_dt, damp);
         self.store_omega(omega);
         self.cached = Some(version);
+        removed
     }
 
     /// Velocity from vorticity: `Lap psi = -omega`, `u = curl psi`, spectrally exact.
@@ -289,7 +398,7 @@ impl Spectral {
         if self.cached != Some(version) {
             self.load_omega(omega);
             if self.dim == 3 {
-                self.filter_omega(0.0);
+                self.filter_omega(0.0, TopDamping::NONE);
                 self.store_omega(omega);
             }
             self.cached = Some(version);

@@ -384,7 +384,7 @@ fn velocity_cached_equals_fresh() {
         let mut omega: Vec<Vec<f64>> = (0..ncomp).map(|_| rng.field(grid.len())).collect();
         let mut sp = Spectral::new(&grid);
         let bg = [0.1, 0.2, 0.3];
-        sp.diffuse(&mut omega, 0.05, 7);
+        sp.diffuse(&mut omega, 0.05, TopDamping::NONE, 7);
         assert_eq!(sp.cached_version(), Some(7));
         let mut u1 = vec![vec![0.0; grid.len()]; grid.dim];
         sp.velocity(&mut omega, 7, bg, &mut u1);
@@ -446,7 +446,7 @@ fn diffuse_single_mode_decays_exactly() {
         let w0 = sample(&grid, |x| t.amp * t.arg(&grid, x).sin());
         let mut w = vec![w0.clone()];
         let mut sp = Spectral::new(&grid);
-        sp.diffuse(&mut w, nu_dt, 1);
+        sp.diffuse(&mut w, nu_dt, TopDamping::NONE, 1);
         let expect: Vec<f64> = w0.iter().map(|v| v * f).collect();
         let err = max_diff(&w[0], &expect);
         assert!(err < 1e-12, "2D mode {m:?}: {err:e}");
@@ -471,7 +471,7 @@ fn diffuse_single_mode_decays_exactly() {
         let w0 = sample(&grid, |x| t.amp * t.arg(&grid, x).cos());
         let mut w = vec![vec![0.0; grid.len()]; 3];
         w[c] = w0.clone();
-        sp.diffuse(&mut w, nu_dt, 2);
+        sp.diffuse(&mut w, nu_dt, TopDamping::NONE, 2);
         for (a, wa) in w.iter().enumerate() {
             let err = if a == c {
                 let expect: Vec<f64> = w0.iter().map(|v| v * f).collect();
@@ -484,6 +484,110 @@ fn diffuse_single_mode_decays_exactly() {
     }
 }
 
+/// ½⟨|u|²⟩ of the velocity of a 3D vorticity field.
+fn energy_of(grid: &Grid, sp: &mut Spectral, w: &[Vec<f64>], version: u64) -> f64 {
+    let mut w = w.to_vec();
+    let mut u = vec![vec![0.0; grid.len()]; 3];
+    sp.velocity(&mut w, version, [0.0; 3], &mut u);
+    let sum: f64 = (0..grid.len())
+        .map(|i| u.iter().map(|c| c[i] * c[i]).sum::<f64>())
+        .sum();
+    0.5 * sum / grid.len() as f64
+}
+
+#[test]
+fn top_damping_is_exact_per_unit_time_and_spares_resolved_modes() {
+    // Divergence-free single modes on a 16 x 12 x 10 grid (h = 0.3, k_N = pi/h): one on an
+    // axis at the Nyquist wavenumber of y, one at |k| = k_N/2, one beyond the sphere of
+    // radius k_N. Each is multiplied by exp(-S (|k|/k_N)^(2p)) whatever the number of steps
+    // S is cut into, and the energy the damping reports removed is the drop of ½<|u|^2>.
+    let grid = Grid::new([16, 12, 10], 0.3, [0.0; 3]);
+    let kn = PI / grid.h;
+    let (total, order) = (0.7, 8);
+    for (c, m) in [(0, [0, 6, 0]), (2, [4, 0, 0]), (1, [8, 0, 5])] {
+        let t = Term {
+            comp: c,
+            m,
+            amp: 0.9,
+            phase: 0.2,
+        };
+        let q = t.k2(&grid) / (kn * kn);
+        let expect_factor = (-total * q.powi(order)).exp();
+        let w0 = sample(&grid, |x| t.amp * t.arg(&grid, x).cos());
+        for steps in [1, 2, 5] {
+            let mut sp = Spectral::new(&grid);
+            let mut w = vec![vec![0.0; grid.len()]; 3];
+            w[c] = w0.clone();
+            let e_before = energy_of(&grid, &mut sp, &w, 100);
+            let damp = TopDamping {
+                strength: total / steps as f64,
+                order,
+            };
+            let mut removed = 0.0;
+            for s in 0..steps {
+                removed += sp.diffuse(&mut w, 0.0, damp, s as u64);
+            }
+            let expect: Vec<f64> = w0.iter().map(|v| v * expect_factor).collect();
+            let err = max_diff(&w[c], &expect) / max_abs(&w0);
+            assert!(
+                err < 1e-12,
+                "mode {m:?}, {steps} steps: factor error {err:e}"
+            );
+            let e_after = energy_of(&grid, &mut sp, &w, 200);
+            let drop = e_before - e_after;
+            // The energy scale of the mode (a Nyquist mode has no velocity: both are 0).
+            let scale = 0.5 * t.amp * t.amp / t.k2(&grid);
+            assert!(
+                (removed - drop).abs() <= 1e-12 * scale,
+                "mode {m:?}, {steps} steps: removed {removed:e}, energy drop {drop:e}"
+            );
+        }
+        if m == [4, 0, 0] {
+            // |k| = k_N/2: a resolved mode loses 2^-16 of the rate at the Nyquist wavenumber.
+            assert!(
+                (1.0 - expect_factor) < 1.1e-5,
+                "k_N/2 damped by {expect_factor}"
+            );
+        }
+        if m == [8, 0, 5] {
+            // Beyond the sphere |k| = k_N (|k|/k_N = 1.19): removed within the interval.
+            assert!(expect_factor < 0.01, "corner mode kept {expect_factor}");
+        }
+    }
+    // A random field: the energy accounting holds over the whole half spectrum (the x
+    // Nyquist plane and the conjugate pairs), on an odd and an even grid.
+    for n in [[12, 10, 8], [9, 7, 6]] {
+        let grid = Grid::new(n, 0.25, [0.0; 3]);
+        let mut sp = Spectral::new(&grid);
+        let mut rng = Rng(5);
+        let mut w: Vec<Vec<f64>> = (0..3).map(|_| rng.field(grid.len())).collect();
+        sp.diffuse(&mut w, 0.0, TopDamping::NONE, 1);
+        let before = energy_of(&grid, &mut sp, &w, 2);
+        let damp = TopDamping {
+            strength: 0.5,
+            order: 8,
+        };
+        let removed = sp.diffuse(&mut w, 0.01, damp, 3);
+        // The same diffusion without the damping, for the energy it alone leaves.
+        let mut sp2 = Spectral::new(&grid);
+        let mut rng = Rng(5);
+        let mut w2: Vec<Vec<f64>> = (0..3).map(|_| rng.field(grid.len())).collect();
+        sp2.diffuse(&mut w2, 0.0, TopDamping::NONE, 1);
+        sp2.diffuse(&mut w2, 0.01, TopDamping::NONE, 3);
+        let diffused = energy_of(&grid, &mut sp2, &w2, 4);
+        let after = energy_of(&grid, &mut sp, &w, 5);
+        let drop = diffused - after;
+        assert!(
+            drop > 0.01 * before,
+            "{n:?}: the damping removed only {drop:e} of {before:e}"
+        );
+        assert!(
+            (removed - drop).abs() < 1e-10 * before,
+            "{n:?}: removed {removed:e}, energy drop {drop:e}"
+        );
+    }
+}
+
 #[test]
 fn diffuse_cleans_divergence_3d() {
     for n in [[12, 10, 8], [9, 7, 5]] {
@@ -493,19 +597,19 @@ fn diffuse_cleans_divergence_3d() {
         let mut w: Vec<Vec<f64>> = (0..3).map(|_| rng.field(grid.len())).collect();
         let before = relative_divergence(&grid, &mut sp, &w);
         assert!(before > 0.1, "random field should not be divergence-free");
-        sp.diffuse(&mut w, 0.0, 1);
+        sp.diffuse(&mut w, 0.0, TopDamping::NONE, 1);
         let after = relative_divergence(&grid, &mut sp, &w);
         assert!(after < 1e-12, "{n:?}: divergence after cleaning {after:e}");
         // Cleaning (without diffusion) a divergence-free field changes nothing.
         let clean = w.clone();
-        sp.diffuse(&mut w, 0.0, 2);
+        sp.diffuse(&mut w, 0.0, TopDamping::NONE, 2);
         for c in 0..3 {
             let err = max_diff(&w[c], &clean[c]);
             assert!(err < 1e-12, "{n:?}: idempotence comp {c}: {err:e}");
         }
         // With diffusion too.
         let mut w: Vec<Vec<f64>> = (0..3).map(|_| rng.field(grid.len())).collect();
-        sp.diffuse(&mut w, 0.3, 3);
+        sp.diffuse(&mut w, 0.3, TopDamping::NONE, 3);
         let after = relative_divergence(&grid, &mut sp, &w);
         assert!(after < 1e-12, "{n:?}: divergence after diffusion {after:e}");
     }
@@ -534,7 +638,7 @@ fn diffuse_cleans_divergence_3d() {
     let (omega0, _) = analytic(&grid, &terms, [0.0; 3]);
     let mut omega = omega0.clone();
     let mut sp = Spectral::new(&grid);
-    sp.diffuse(&mut omega, 0.0, 1);
+    sp.diffuse(&mut omega, 0.0, TopDamping::NONE, 1);
     for c in 0..3 {
         let err = max_diff(&omega[c], &omega0[c]);
         assert!(err < 1e-12, "analytic comp {c}: {err:e}");
@@ -561,7 +665,7 @@ fn run_all(n: [usize; 3]) -> Vec<u64> {
     let mut u = vec![vec![0.0; grid.len()]; grid.dim];
     sp.velocity(&mut omega, 1, [0.1, 0.2, 0.3], &mut u);
     out.extend(u.iter().flatten().map(|v| v.to_bits()));
-    sp.diffuse(&mut omega, 0.02, 2);
+    sp.diffuse(&mut omega, 0.02, TopDamping::NONE, 2);
     out.extend(omega.iter().flatten().map(|v| v.to_bits()));
     sp.velocity(&mut omega, 2, [0.0; 3], &mut u);
     out.extend(u.iter().flatten().map(|v| v.to_bits()));
@@ -623,7 +727,7 @@ fn timing_128_cubed() {
             sp.inverse(&mut hats[r % 3], &mut out);
         }
         let t1 = Instant::now();
-        sp.diffuse(&mut omega, 1e-3, it);
+        sp.diffuse(&mut omega, 1e-3, TopDamping::NONE, it);
         sp.velocity(&mut omega, it, [0.0; 3], &mut u);
         let t2 = Instant::now();
         if it > 0 {
