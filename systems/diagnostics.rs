@@ -326,11 +326,19 @@ fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
 /// The largest speed of a point of a dynamic body: |V| + |Ω| R, R the radius of the sphere
 /// (disk in 2D) of the body's volume.
 fn body_speed(grid: &Grid, bodies: &Bodies) -> f64 {
+    fastest_body(grid.dim, bodies.iter().map(|(b, _, st)| (b, st)))
+}
+
+/// The largest |V| + |Ω| R over the dynamic ones of `bodies` (R the radius of the sphere, or
+/// disk in `dim` = 2, of the body's volume): the speed [`Diagnostics::body_speed`] holds.
+pub fn fastest_body<'a>(
+    dim: usize,
+    bodies: impl Iterator<Item = (&'a Body, &'a RigidState)>,
+) -> f64 {
     bodies
-        .iter()
-        .filter(|(b, _, _)| b.is_dynamic())
-        .map(|(_, _, st)| {
-            let r = if grid.dim == 2 {
+        .filter(|(b, _)| b.is_dynamic())
+        .map(|(_, st)| {
+            let r = if dim == 2 {
                 (st.volume / std::f64::consts::PI).sqrt()
             } else {
                 (3.0 * st.volume / (4.0 * std::f64::consts::PI)).cbrt()

@@ -5,6 +5,7 @@ use crate::base::fields::Sample;
 use crate::bodies::free_surface::LiquidLevelSet;
 use crate::io::output::CsvWriter;
 use crate::sim::engine::Simulation;
+use crate::systems::diffusion::GridScaleDissipation;
 use anyhow::Context;
 use std::path::Path;
 
@@ -17,21 +18,37 @@ pub const SERIES_COLUMNS: [&str; 6] =
 /// the [`LiquidLevelSet`] after each step.
 pub const LIQUID_COLUMNS: [&str; 2] = ["liquid_volume", "liquid_area"];
 
+/// The column `series.csv` adds in a 3D fluid run: the kinetic energy per unit volume the
+/// grid-scale dissipation has removed since the start ([`GridScaleDissipation`]).
+pub const GRID_SCALE_COLUMN: &str = "grid_scale_removed";
+
 /// `series.csv`: one row per step, [`SERIES_COLUMNS`], then [`LIQUID_COLUMNS`] if the run has
 /// a free surface (its world holds a [`LiquidLevelSet`] when the file is created or, after a
 /// restart, opened: the restored simulation has it if the run had it, so the columns stay the
-/// same).
+/// same), then [`GRID_SCALE_COLUMN`] in a 3D fluid run.
 pub struct SeriesCsv {
     w: CsvWriter,
     liquid: bool,
+    grid_scale: bool,
 }
 
 impl SeriesCsv {
+    fn has_liquid(sim: &Simulation) -> bool {
+        sim.world.contains_resource::<LiquidLevelSet>()
+    }
+
+    fn has_grid_scale(sim: &Simulation) -> bool {
+        sim.grid().dim == 3 && sim.world.contains_resource::<GridScaleDissipation>()
+    }
+
     /// The header of `sim`'s `series.csv`.
     pub fn header(sim: &Simulation) -> Vec<&'static str> {
         let mut h = SERIES_COLUMNS.to_vec();
-        if sim.world.contains_resource::<LiquidLevelSet>() {
+        if Self::has_liquid(sim) {
             h.extend(LIQUID_COLUMNS);
+        }
+        if Self::has_grid_scale(sim) {
+            h.push(GRID_SCALE_COLUMN);
         }
         h
     }
@@ -40,7 +57,8 @@ impl SeriesCsv {
     pub fn create(path: &Path, sim: &Simulation) -> anyhow::Result<Self> {
         let header = Self::header(sim);
         Ok(SeriesCsv {
-            liquid: header.len() > SERIES_COLUMNS.len(),
+            liquid: Self::has_liquid(sim),
+            grid_scale: Self::has_grid_scale(sim),
             w: CsvWriter::create(path, &header).context("cannot create series.csv")?,
         })
     }
@@ -49,7 +67,8 @@ impl SeriesCsv {
     pub fn append(path: &Path, sim: &Simulation) -> anyhow::Result<Self> {
         let header = Self::header(sim);
         Ok(SeriesCsv {
-            liquid: header.len() > SERIES_COLUMNS.len(),
+            liquid: Self::has_liquid(sim),
+            grid_scale: Self::has_grid_scale(sim),
             w: CsvWriter::append(path, header.len()).context("cannot open series.csv")?,
         })
     }
@@ -63,6 +82,10 @@ impl SeriesCsv {
             let l = sim.world.get_resource::<LiquidLevelSet>();
             v.push(l.map_or(f64::NAN, |l| l.volume));
             v.push(l.map_or(f64::NAN, |l| l.area));
+        }
+        if self.grid_scale {
+            let g = sim.world.get_resource::<GridScaleDissipation>();
+            v.push(g.map_or(f64::NAN, |g| g.removed));
         }
         self.w.row(&v).context("cannot write series.csv")
     }

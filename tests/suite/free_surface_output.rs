@@ -296,6 +296,10 @@ fn a_snapshot_holds_the_free_surface_field_part_and_slice() {
 fn series_csv_has_the_liquid_columns_only_with_a_free_surface() {
     let dir = temp("series");
     let mut sim = Simulation::new(scene("fs")).unwrap();
+    // A 3D fluid run also has the grid-scale dissipation's column, last.
+    sim.world
+        .resource_mut::<tumble::systems::diffusion::GridScaleDissipation>()
+        .removed = 0.5;
     let plain = dir.join("plain.csv");
     let mut w = SeriesCsv::create(&plain, &sim).unwrap();
     w.row(&sim).unwrap();
@@ -303,9 +307,10 @@ fn series_csv_has_the_liquid_columns_only_with_a_free_surface() {
     let text = std::fs::read_to_string(&plain).unwrap();
     assert_eq!(
         text.lines().next(),
-        Some("t,dt,energy,enstrophy,circulation,max_omega")
+        Some("t,dt,energy,enstrophy,circulation,max_omega,grid_scale_removed")
     );
-    assert_eq!(text.lines().nth(1).unwrap().split(',').count(), 6);
+    let v: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!((v.len(), v[6]), (7, "0.5"));
 
     let mut ls = liquid(&sim, 0.5, 0.2);
     ls.volume = 0.625;
@@ -323,13 +328,13 @@ fn series_csv_has_the_liquid_columns_only_with_a_free_surface() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(
         lines[0],
-        "t,dt,energy,enstrophy,circulation,max_omega,liquid_volume,liquid_area"
+        "t,dt,energy,enstrophy,circulation,max_omega,liquid_volume,liquid_area,grid_scale_removed"
     );
     assert_eq!(lines.len(), 3);
     for l in &lines[1..] {
         let v: Vec<&str> = l.split(',').collect();
-        assert_eq!(v.len(), 8);
-        assert_eq!((v[6], v[7]), ("0.625", "1.25"));
+        assert_eq!(v.len(), 9);
+        assert_eq!((v[6], v[7], v[8]), ("0.625", "1.25", "0.5"));
     }
 
     // `tumble plot` draws the liquid volume.
