@@ -323,6 +323,30 @@ fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
     }
 }
 
+impl Diagnostics {
+    /// Keep the sample `s` and the bodies' speed, and choose the next step from them.
+    fn keep(
+        &mut self,
+        s: Sample,
+        grid: &Grid,
+        params: &Params,
+        bodies: &Bodies,
+        time: &mut SimTime,
+    ) {
+        self.sample = s;
+        self.body_speed = body_speed(grid, bodies);
+        time.dt = next_dt(
+            params,
+            &s,
+            grid.h,
+            self.dt_fallback,
+            self.body_speed,
+            time.t,
+            time.stop_at,
+        );
+    }
+}
+
 /// The largest speed of a point of a dynamic body: |V| + |Ω| R, R the radius of the sphere
 /// (disk in 2D) of the body's volume.
 fn body_speed(grid: &Grid, bodies: &Bodies) -> f64 {
@@ -366,17 +390,7 @@ pub fn diagnostics_init(
             place(&grid, i, &bodies)
         ));
     }
-    diag.sample = s;
-    diag.body_speed = body_speed(&grid, &bodies);
-    time.dt = next_dt(
-        &params,
-        &s,
-        grid.h,
-        diag.dt_fallback,
-        diag.body_speed,
-        time.t,
-        time.stop_at,
-    );
+    diag.keep(s, &grid, &params, &bodies, &mut time);
 }
 
 /// For a flow that starts at rest (`omega0` = 0) under gravity: √blowup_factor times the speed
@@ -451,17 +465,7 @@ pub fn diagnostics(
             time.t
         ));
     }
-    diag.sample = s;
-    diag.body_speed = body_speed(&grid, &bodies);
-    time.dt = next_dt(
-        &params,
-        &s,
-        grid.h,
-        diag.dt_fallback,
-        diag.body_speed,
-        time.t,
-        time.stop_at,
-    );
+    diag.keep(s, &grid, &params, &bodies, &mut time);
 }
 
 /// Clock, time step and global quantities: the first dt at startup, then every step.
