@@ -21,7 +21,7 @@
 use crate::base::fields::{Fields, Params, Sample, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::TimeStep;
-use crate::bodies::{Body, BodyShape, RigidState};
+use crate::bodies::{Body, BodyShape, Material, RigidState};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -37,9 +37,6 @@ pub struct Diagnostics {
     pub failure: Option<String>,
     /// Fallback step when nothing else bounds dt (fluid at rest, no dt_max).
     pub dt_fallback: f64,
-    /// The largest speed of a point of a dynamic body, |V| + |Ω| R with R the radius of the
-    /// sphere of the body's volume, after the last step (0 without dynamic bodies).
-    pub body_speed: f64,
     rows: Vec<RowStats>,
 }
 
@@ -74,7 +71,6 @@ impl Diagnostics {
             omega0: 0.0,
             failure: None,
             dt_fallback,
-            body_speed: 0.0,
             rows: vec![RowStats::default(); grid.n[1] * grid.n[2]],
         }
     }
@@ -163,24 +159,66 @@ pub struct StepBounds {
     pub viscous: f64,
     /// √(|g|/h) with a free surface (dt ≤ c / wave), else 0.
     pub wave: f64,
-    /// √(a/h), a the largest acceleration gravity gives a dynamic body (see
-    /// [`Params::body_gravity_rate`]), else 0: in dt = c / rate a body starting the step at
-    /// rest moves at most ½ c² h.
+    /// √(a/h), a = [`BodyMotion::gravity`], else 0: the rate at which gravity moves a dynamic
+    /// body across a cell. In dt = c / rate a body that starts the step at rest moves ½ c² h
+    /// at most; without it a flow at rest would have nothing to bound its first steps but the
+    /// next output time, and the result would depend on `output.every`.
     pub body_gravity: f64,
     /// The fastest dynamic body's speed (dt ≤ cfl h / speed), else 0.
     pub body_speed: f64,
 }
 
 impl StepBounds {
-    /// The bounds of `params` on spacing `h`, with dynamic bodies whose fastest point moves
-    /// at `body_speed`.
-    pub fn new(params: &Params, h: f64, body_speed: f64) -> Self {
+    /// The bounds of `params` on spacing `h`, with dynamic bodies moving as `motion` says.
+    pub fn new(params: &Params, h: f64, motion: BodyMotion) -> Self {
         StepBounds {
             viscous: params.viscous_rate(h),
             wave: params.wave_rate(h),
-            body_gravity: params.body_gravity_rate(h),
-            body_speed,
+            body_gravity: (motion.gravity / h).sqrt(),
+            body_speed: motion.speed,
         }
+    }
+}
+
+/// What the dynamic bodies ask of the next step, from the body entities as they are.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BodyMotion {
+    /// The largest speed of a point of a dynamic body, |V| + |Ω| R with R the radius of the
+    /// sphere (disk in 2D) of the body's volume.
+    pub speed: f64,
+    /// The largest acceleration gravity gives a dynamic body released from rest in the fluid,
+    /// |g| |ρ_i - ρ_F| / (ρ_i + ρ_F/2) (a sphere's added mass; drag only slows a body down).
+    pub gravity: f64,
+}
+
+/// The components [`BodyMotion::of`] reads from a body.
+pub type BodyItem = (&'static Body, &'static Material, &'static RigidState);
+
+impl BodyMotion {
+    /// The motion of the dynamic ones of `bodies` in a `dim`-dimensional run of `params`.
+    pub fn of<'a>(
+        dim: usize,
+        params: &Params,
+        bodies: impl Iterator<Item = (&'a Body, &'a Material, &'a RigidState)>,
+    ) -> Self {
+        let g = params.gravity.iter().map(|g| g * g).sum::<f64>().sqrt();
+        let rho_f = params.rho_fluid;
+        bodies
+            .filter(|(b, _, _)| b.is_dynamic())
+            .fold(BodyMotion::default(), |m, (_, mat, st)| {
+                let r = if dim == 2 {
+                    (st.volume / std::f64::consts::PI).sqrt()
+                } else {
+                    (3.0 * st.volume / (4.0 * std::f64::consts::PI)).cbrt()
+                };
+                let rho = mat.density;
+                BodyMotion {
+                    speed: m
+                        .speed
+                        .max(st.velocity.length() + st.angular_velocity.length() * r),
+                    gravity: m.gravity.max(g * (rho - rho_f).abs() / (rho + 0.5 * rho_f)),
+                }
+            })
     }
 }
 
@@ -241,11 +279,11 @@ pub fn next_dt(
     sample: &Sample,
     h: f64,
     fallback: f64,
-    body_speed: f64,
+    motion: BodyMotion,
     t: f64,
     stop_at: Option<f64>,
 ) -> f64 {
-    let bounds = StepBounds::new(params, h, body_speed);
+    let bounds = StepBounds::new(params, h, motion);
     let dt = allowed_dt(&params.dt_policy, sample, h, fallback, bounds);
     if params.dt_policy.lands_on_outputs() {
         land_on(t, dt, stop_at)
@@ -279,13 +317,27 @@ pub fn land_on(t: f64, dt: f64, stop_at: Option<f64>) -> f64 {
 }
 
 /// The bodies, for the blow-up messages and the bodies' speed.
-type Bodies<'w, 's> = Query<'w, 's, (&'static Body, &'static BodyShape, &'static RigidState)>;
+type Bodies<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Body,
+        &'static BodyShape,
+        &'static Material,
+        &'static RigidState,
+    ),
+>;
+
+/// The indices and position of the grid node `idx`.
+fn node_at(grid: &Grid, idx: usize) -> ((usize, usize, usize), [f64; 3]) {
+    let [nx, ny, _] = grid.n;
+    let (i, j, k) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
+    ((i, j, k), grid.pos(i, j, k))
+}
 
 /// The grid node `idx` as indices and position.
 fn node(grid: &Grid, idx: usize) -> String {
-    let [nx, ny, _] = grid.n;
-    let (i, j, k) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
-    let p = grid.pos(i, j, k);
+    let ((i, j, k), p) = node_at(grid, idx);
     if grid.dim == 2 {
         format!("node ({i}, {j}) at x = ({:.4}, {:.4})", p[0], p[1])
     } else {
@@ -298,13 +350,10 @@ fn node(grid: &Grid, idx: usize) -> String {
 
 /// The grid node `idx`, and the nearest body's surface with the distance to it in cells.
 fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
-    let [nx, ny, _] = grid.n;
-    let (i, j, k) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
-    let p = grid.pos(i, j, k);
-    let x = glam::DVec3::new(p[0], p[1], if grid.dim == 2 { 0.0 } else { p[2] });
+    let x = glam::DVec3::from_array(node_at(grid, idx).1);
     let nearest = bodies
         .iter()
-        .map(|(b, shape, st)| {
+        .map(|(b, shape, _, st)| {
             let local = st.orientation.inverse() * (x - st.center);
             (b, shape.level_set.phi(local))
         })
@@ -324,7 +373,7 @@ fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
 }
 
 impl Diagnostics {
-    /// Keep the sample `s` and the bodies' speed, and choose the next step from them.
+    /// Keep the sample `s` and choose the next step from it and the bodies' motion.
     fn keep(
         &mut self,
         s: Sample,
@@ -334,42 +383,21 @@ impl Diagnostics {
         time: &mut SimTime,
     ) {
         self.sample = s;
-        self.body_speed = body_speed(grid, bodies);
+        let motion = BodyMotion::of(
+            grid.dim,
+            params,
+            bodies.iter().map(|(b, _, m, st)| (b, m, st)),
+        );
         time.dt = next_dt(
             params,
             &s,
             grid.h,
             self.dt_fallback,
-            self.body_speed,
+            motion,
             time.t,
             time.stop_at,
         );
     }
-}
-
-/// The largest speed of a point of a dynamic body: |V| + |Ω| R, R the radius of the sphere
-/// (disk in 2D) of the body's volume.
-fn body_speed(grid: &Grid, bodies: &Bodies) -> f64 {
-    fastest_body(grid.dim, bodies.iter().map(|(b, _, st)| (b, st)))
-}
-
-/// The largest |V| + |Ω| R over the dynamic ones of `bodies` (R the radius of the sphere, or
-/// disk in `dim` = 2, of the body's volume): the speed [`Diagnostics::body_speed`] holds.
-pub fn fastest_body<'a>(
-    dim: usize,
-    bodies: impl Iterator<Item = (&'a Body, &'a RigidState)>,
-) -> f64 {
-    bodies
-        .filter(|(b, _)| b.is_dynamic())
-        .map(|(_, st)| {
-            let r = if dim == 2 {
-                (st.volume / std::f64::consts::PI).sqrt()
-            } else {
-                (3.0 * st.volume / (4.0 * std::f64::consts::PI)).cbrt()
-            };
-            st.velocity.length() + st.angular_velocity.length() * r
-        })
-        .fold(0.0, f64::max)
 }
 
 /// Measure the initial state and choose the first step (run once before the first step).

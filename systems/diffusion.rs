@@ -28,8 +28,10 @@
 //! |k| = √3 k_N), it removes what is there within a step (a spectral vanishing viscosity,
 //! Tadmor 1989, with the strength of a subgrid model;
 //! the variational multiscale idea of acting on the small scales only, Hughes et al. 2001,
-//! Jeanmart & Winckelmans 2007). It is a rate per unit time applied exactly, so what it removes
-//! over an interval does not depend on Δt, and it has no user setting.
+//! Jeanmart & Winckelmans 2007). It is a rate per unit time applied exactly, so what it does to
+//! a given state over an interval does not depend on Δt, except where it saturates within a
+//! step in those corners (see [`ORDER`]); the state itself does depend on Δt through the M'4
+//! remesh's own grid-scale damping, O(δ²) per step (docs/numerics.md). It has no user setting.
 //!
 //! Why: at cell Reynolds numbers in the hundreds (a body in water, ν = 1e-4 cgs) nothing else
 //! removes what the stretching and the penalization put at the grid scale where particles
@@ -66,8 +68,6 @@ pub const ORDER: i32 = 8;
 pub struct GridScaleDissipation {
     /// Kinetic energy per unit volume it removed since the start of the run.
     pub removed: f64,
-    /// Its rate at |k| = k_N in the last step, C_s² π² max|ω| (1/time).
-    pub rate: f64,
 }
 
 /// The rate at |k| = k_N of the grid-scale dissipation for a flow whose largest vorticity is
@@ -90,10 +90,8 @@ pub fn diffusion(
         return;
     }
     let damp = if three_d {
-        let rate = grid_scale_rate(crate::solvers::max_norm(fields.omega()));
-        gsd.rate = rate;
         TopDamping {
-            strength: rate * time.dt,
+            strength: grid_scale_rate(crate::solvers::max_norm(fields.omega())) * time.dt,
             order: ORDER,
         }
     } else {

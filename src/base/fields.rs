@@ -126,10 +126,6 @@ pub struct Params {
     pub has_bodies: bool,
     /// Whether the scene has a free surface.
     pub free_surface: bool,
-    /// The largest acceleration gravity gives a dynamic body released from rest in the fluid,
-    /// |g| |ρ_i - ρ_F| / (ρ_i + ρ_F/2) over the dynamic bodies (a sphere's added mass; drag
-    /// only slows a body down), length/time²; 0 without dynamic bodies.
-    pub body_gravity: f64,
 }
 
 /// The penalization mask of a body from its χ and φ at a node: χ itself when the offset is
@@ -172,15 +168,6 @@ impl Params {
         } else {
             0.0
         }
-    }
-
-    /// √(a/h) with a = [`Params::body_gravity`]: the rate at which gravity moves a dynamic body
-    /// across a cell. In dt = c / rate a body that starts the step at rest moves ½ c² h at
-    /// most, so an adaptive step bounds it (with the Lagrangian CFL number c), at every step:
-    /// without it a flow at rest would have nothing to bound its first steps but the next
-    /// output time, and the result would depend on `output.every`.
-    pub fn body_gravity_rate(&self, h: f64) -> f64 {
-        (self.body_gravity / h).sqrt()
     }
 
     /// ν/h² when the scene has bodies (the diffusion-number bound applies), else 0.

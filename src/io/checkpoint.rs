@@ -742,12 +742,6 @@ impl Checkpoint {
             *f = s.free;
             *p = s.prev;
         }
-        // The fastest body's speed bounds the next step (kept as the diagnostics measured it
-        // after the step the checkpoint closes).
-        let dim = sim.grid().dim;
-        let mut q = sim.world.query::<(&Body, &RigidState)>();
-        let speed = crate::systems::diagnostics::fastest_body(dim, q.iter(&sim.world));
-        sim.world.resource_mut::<Diagnostics>().body_speed = speed;
         sim.restore_state(&self.state).map_err(|m| self.error(m))?;
         Ok(())
     }

@@ -33,19 +33,6 @@ pub fn params(scene: &ValidScene) -> Params {
         interface_acceleration: scene.numerics.interface_acceleration,
         has_bodies: !scene.bodies.is_empty(),
         free_surface: scene.free_surface.is_some(),
-        body_gravity: {
-            let g = scene.gravity().iter().map(|g| g * g).sum::<f64>().sqrt();
-            let rho_f = scene.fluid.density;
-            scene
-                .bodies
-                .iter()
-                .filter(|b| matches!(b.kind, crate::scene::BodyKind::Dynamic))
-                .map(|b| {
-                    let rho = b.density.unwrap_or(rho_f);
-                    g * (rho - rho_f).abs() / (rho + 0.5 * rho_f)
-                })
-                .fold(0.0, f64::max)
-        },
     }
 }
 

@@ -5,7 +5,7 @@ use crate::base::grid::Grid;
 use crate::scene::ValidScene;
 use crate::schedule::{Mode, Plugin, Scheduler, StateRecord};
 use crate::sim::init::add_initial;
-use crate::systems::diagnostics::Diagnostics;
+use crate::systems::diagnostics::{BodyItem, BodyMotion, Diagnostics};
 use bevy_ecs::prelude::*;
 
 /// A running simulation.
@@ -156,19 +156,15 @@ impl Simulation {
     /// time; see [`crate::base::params::TimeStep`]): the steps are shortened as they come
     /// near it. `None` lands nowhere. The next step is recomputed now.
     pub fn set_stop_at(&mut self, t: Option<f64>) {
-        let h = self.grid().h;
+        let (h, dim) = (self.grid().h, self.grid().dim);
+        let params = self.world.resource::<Params>().clone();
+        let mut q = self.world.query::<BodyItem>();
+        let motion = BodyMotion::of(dim, &params, q.iter(&self.world));
         let diag = self.world.resource::<Diagnostics>();
-        let (sample, fallback, body_speed) = (diag.sample, diag.dt_fallback, diag.body_speed);
+        let (sample, fallback) = (diag.sample, diag.dt_fallback);
         let now = self.time();
-        let dt = crate::systems::diagnostics::next_dt(
-            self.world.resource::<Params>(),
-            &sample,
-            h,
-            fallback,
-            body_speed,
-            now,
-            t,
-        );
+        let dt =
+            crate::systems::diagnostics::next_dt(&params, &sample, h, fallback, motion, now, t);
         let mut time = self.world.resource_mut::<SimTime>();
         time.stop_at = t;
         time.dt = dt;
