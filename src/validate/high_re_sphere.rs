@@ -56,11 +56,19 @@ struct Trace {
 }
 
 impl Trace {
+    /// The energy removed by time `t`, linear between the steps around it (NaN outside the
+    /// run).
     fn removed_at(&self, t: f64) -> f64 {
-        self.removed
-            .iter()
-            .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))
-            .map_or(f64::NAN, |e| e.1)
+        let i = self.removed.partition_point(|e| e.0 < t);
+        match (
+            i.checked_sub(1).map(|j| self.removed[j]),
+            self.removed.get(i),
+        ) {
+            (_, Some(&(t1, r1))) if t1 == t => r1,
+            (Some((t0, r0)), Some(&(t1, r1))) => r0 + (r1 - r0) * (t - t0) / (t1 - t0),
+            (None, Some(&(t1, r1))) => r1 * t / t1,
+            _ => f64::NAN,
+        }
     }
 }
 
