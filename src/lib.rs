@@ -6,10 +6,12 @@
 //!
 //! The modules are layers; each uses only the ones above it in this list (a test checks it):
 //! - [`base`]: grid, fields, kernels, typed parameters;
-//! - [`solvers`]: the FFT engine and spectral operators;
-//! - [`bodies`]: shapes, level sets, body components, the contact kernel;
+//! - [`solvers`]: the FFT engine, the spectral operators, the curl, the particle line sweeps;
+//! - [`bodies`]: shapes, level sets, body components, the integrals over a body, the contact
+//!   kernel;
 //! - [`schedule`]: the named sets of a step, the plugin interface, timing, checkpoint state;
-//! - [`systems`]: the physics systems (one file each, in `systems/`);
+//! - [`systems`]: the physics systems (one file each, in `systems/`; none uses another: what
+//!   two share sits in a lower layer);
 //! - [`scene`]: the RON scene format and its validation;
 //! - [`sim`]: the world built from a validated scene, the engine;
 //! - [`io`]: snapshots, checkpoints, log, plots;

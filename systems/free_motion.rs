@@ -14,8 +14,8 @@
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
+use crate::bodies::integrals::{BodySums, mass_properties};
 use crate::bodies::{Body, ContactState, FreeMotion, GridPatch, Material, RigidState};
-use crate::systems::rigid_velocity::{BodySums, mass_properties};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
@@ -80,6 +80,7 @@ impl crate::schedule::Plugin for FreeMotionPlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         if ctx.mode().vacuum {
+            ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
             ctx.add_system(PhysicsSet::RigidUpdate, "free_motion", free_motion)?;
         }
         Ok(())

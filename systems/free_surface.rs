@@ -57,7 +57,7 @@ use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::kernels::heaviside;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
 use crate::bodies::{Body, BodyFields, GridPatch};
-use crate::systems::transport::{LinePool, LineScratch, sweep};
+use crate::solvers::sweep::{LinePool, LineScratch, sweep};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 

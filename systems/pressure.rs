@@ -76,44 +76,18 @@
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::params::BodyCoupling;
+use crate::bodies::coupling::{ExcessMomentum, PressureState};
 use crate::bodies::free_surface::FreeSurface;
+use crate::bodies::integrals::{BodySums, integrate_n, penalized_weight};
 use crate::bodies::{Body, BodyFields, GridPatch, Material, RigidState};
 use crate::solvers::Spectral;
+use crate::solvers::operators::curl_add;
 use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson, wants_multigrid};
-use crate::systems::rigid_velocity::{BodySums, integrate_n, penalized_weight};
 use bevy_ecs::prelude::*;
-use glam::DVec3;
 use rayon::prelude::*;
 
 /// Relative residual at which the pressure solve stops.
 pub const TOLERANCE: f64 = 1e-7;
-
-/// The momentum a dynamic body's mass beyond the fluid's had at the end of the last step's
-/// projection, per unit of that mass: it travels with the body to the next step.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ExcessMomentum {
-    /// Its mean velocity, ∫(ρ - ρ_P) w ũ / ∫(ρ - ρ_P) w.
-    pub velocity: DVec3,
-    /// Its angular momentum about its own centroid per unit mass,
-    /// ∫(ρ - ρ_P) w r × ũ / ∫(ρ - ρ_P) w.
-    pub spin: DVec3,
-}
-
-/// What the pressure projection carries from one step to the next (checkpointed): the last
-/// potential (the warm start) and the momentum of each dynamic body's excess mass.
-#[derive(Resource, Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
-pub struct PressureState {
-    /// Δt p' of the last solve (periodic part), per node.
-    pub phi: Vec<f64>,
-    /// Per body (indexed by `Body::id`; `None` for the others and before the first
-    /// projection): the momentum of its mass beyond the fluid's, from ũ = u + the projected
-    /// increments over the region its penalization moved (see the module doc).
-    /// Split by the sign of ρ - ρ_P: [the part heavier than the fluid phase, the lighter
-    /// part], each a mean over a weight of one sign. (One mean over the whole excess mass
-    /// divides by ∫(ρ - ρ_P) w, which passes through zero for a body floating at its
-    /// waterline: a floating box's rigid velocity jumped to 1e4 in one step.)
-    pub excess: Vec<Option<[ExcessMomentum; 2]>>,
-}
 
 /// The pressure solver's scratch: the variable-coefficient Poisson solver (face coefficients,
 /// conjugate-gradient vectors, multigrid hierarchy) and the increments, allocated once.
@@ -343,7 +317,7 @@ pub fn pressure(
             }
         });
     }
-    crate::systems::penalization::curl_add(&grid, &bf.du, fields.omega_mut());
+    curl_add(&grid, &bf.du, fields.omega_mut());
     // The momentum of each dynamic body's excess mass, taken over the region its
     // penalization moved this step: the body carries it to the next step's rigid velocity.
     let ldt = params.lambda * dt;
@@ -396,6 +370,7 @@ impl crate::schedule::Plugin for PressurePlugin {
         let coupling = ctx.world.resource::<Params>().body_coupling;
         if mode.fluid() && mode.has_bodies() && coupling == BodyCoupling::Pressure {
             ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
+            ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
             let grid = ctx.world.resource::<Grid>().clone();
             // The multigrid hierarchy only where the densities can differ by its contrast.
             let mut densities = vec![ctx.world.resource::<Params>().rho_fluid];

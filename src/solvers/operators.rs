@@ -1,8 +1,10 @@
 //! Spectral operators on the periodic grid, built on the FFT engine ([`crate::solvers::fft`]):
 //! velocity from vorticity (Poisson, Biot-Savart in Fourier space), implicit diffusion with the
 //! spectral Laplacian's symbol, the divergence cleaning of a 3D vorticity, and the inverse of
-//! the second-order difference Laplacian (the variable-density pressure solve's preconditioner).
-//! Complex fields use the layout described in [`crate::solvers::fft`].
+//! the second-order difference Laplacian (the variable-density pressure solve's preconditioner);
+//! and the centred-difference curl that turns a velocity increment into vorticity
+//! ([`curl_add`]: the penalization's and the pressure projection's). Complex fields use the
+//! layout described in [`crate::solvers::fft`].
 
 use crate::base::grid::Grid;
 use crate::solvers::fft::{C64, FftEngine, wavenumber};
@@ -462,4 +464,55 @@ impl Spectral {
                 }
             });
     }
+}
+
+/// ω += ∇×a by centred differences (periodic): the vorticity of a velocity increment `a`
+/// (the penalization's, `systems/penalization.rs`, or the pressure projection's,
+/// `systems/pressure.rs`).
+pub fn curl_add(grid: &Grid, a: &[Vec<f64>], omega: &mut [Vec<f64>]) {
+    let [nx, ny, nz] = grid.n;
+    let inv2h = 0.5 / grid.h;
+    let plane = nx * ny;
+    let nb = crate::base::grid::periodic_neighbours;
+    if grid.dim == 2 {
+        omega[0]
+            .par_chunks_mut(nx)
+            .enumerate()
+            .for_each(|(j, row)| {
+                let (jm, jp) = nb(j, ny);
+                for i in 0..nx {
+                    let (im, ip) = nb(i, nx);
+                    let dvy_dx = (a[1][ip + nx * j] - a[1][im + nx * j]) * inv2h;
+                    let dux_dy = (a[0][i + nx * jp] - a[0][i + nx * jm]) * inv2h;
+                    row[i] += dvy_dx - dux_dy;
+                }
+            });
+        return;
+    }
+    let (o0, rest) = omega.split_at_mut(1);
+    let (o1, o2) = rest.split_at_mut(1);
+    o0[0]
+        .par_chunks_mut(plane)
+        .zip(o1[0].par_chunks_mut(plane))
+        .zip(o2[0].par_chunks_mut(plane))
+        .enumerate()
+        .for_each(|(k, ((w0, w1), w2))| {
+            let (km, kp) = nb(k, nz);
+            for j in 0..ny {
+                let (jm, jp) = nb(j, ny);
+                for i in 0..nx {
+                    let (im, ip) = nb(i, nx);
+                    let id = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
+                    let d = |f: &[f64], axis: usize| match axis {
+                        0 => (f[id(ip, j, k)] - f[id(im, j, k)]) * inv2h,
+                        1 => (f[id(i, jp, k)] - f[id(i, jm, k)]) * inv2h,
+                        _ => (f[id(i, j, kp)] - f[id(i, j, km)]) * inv2h,
+                    };
+                    let l = i + nx * j;
+                    w0[l] += d(&a[2], 1) - d(&a[1], 2);
+                    w1[l] += d(&a[0], 2) - d(&a[2], 0);
+                    w2[l] += d(&a[1], 0) - d(&a[0], 1);
+                }
+            }
+        });
 }

@@ -13,7 +13,7 @@ use crate::io::plot::{Series, Style, line_chart};
 use crate::scene::{RemeshKernel, Scene, ValidScene};
 use crate::sim::engine::Simulation;
 use crate::solvers::Spectral;
-use crate::systems::transport::{LinePool, LineScratch, sweep};
+use crate::solvers::sweep::{LinePool, LineScratch, sweep};
 use std::f64::consts::PI;
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -1,0 +1,191 @@
+//! Integrals over a body's patch on the grid: volume, centroid, momentum, angular momentum and
+//! inertia of a weight χ (the rigid velocity of paper eq. 7, the mass properties of a body in
+//! vacuum, the excess momentum of the pressure projection), several weights in one pass, with
+//! the per-row partial sums preallocated in [`BodySums`]. Sums are taken per patch row and added
+//! in row order, so they do not depend on the number of threads.
+
+use crate::base::grid::Grid;
+use crate::bodies::{Body, GridPatch, RigidState, kinematic_velocity};
+use bevy_ecs::prelude::*;
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+
+/// Per-row partial sums (preallocated, so a step allocates nothing).
+#[derive(Resource, Debug, Clone)]
+pub struct BodySums {
+    rows: Vec<[f64; 16]>,
+}
+
+impl BodySums {
+    /// The row buffer (for other systems that sum over patches).
+    pub fn rows_mut(&mut self) -> &mut [[f64; 16]] {
+        &mut self.rows
+    }
+
+    /// Room for the largest patch of `grid` (ny nz rows), [`MAX_WEIGHTS`] weights a row.
+    pub fn new(grid: &Grid) -> Self {
+        BodySums {
+            rows: vec![[0.0; 16]; MAX_WEIGHTS * grid.n[1] * grid.n[2]],
+        }
+    }
+}
+
+/// The weight w = λΔtχ/(1 + λΔtχ) with which the implicit penalization (`ldt` = λΔt) moves
+/// a node of characteristic function `chi` to the rigid velocity: the region a body's rigid
+/// velocity is averaged over.
+#[inline]
+pub fn penalized_weight(ldt: f64, chi: f64) -> f64 {
+    ldt * chi / (1.0 + ldt * chi)
+}
+
+/// The integrals of one weight over a patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
+/// measured from the centroid.
+pub type Moments = (f64, DVec3, DVec3, DVec3, DMat3);
+
+/// The most weights [`integrate_n`] takes in one pass.
+pub const MAX_WEIGHTS: usize = 5;
+
+/// Integrals of a weight χ over a body's patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
+/// measured from the centroid; all zero when ∫χ is.
+pub fn integrate(
+    grid: &Grid,
+    patch: &GridPatch,
+    center: DVec3,
+    u: &[Vec<f64>],
+    sums: &mut BodySums,
+    weight: impl Fn(f64, f64, usize) -> f64 + Sync,
+) -> Moments {
+    integrate_n::<1>(grid, patch, center, u, sums, |c, p, g| [weight(c, p, g)])[0]
+}
+
+/// The integrals of `N` weights (at most [`MAX_WEIGHTS`]) in one pass over the patch, each
+/// as [`integrate`] would give it alone (the same sums in the same order, bit for bit).
+pub fn integrate_n<const N: usize>(
+    grid: &Grid,
+    patch: &GridPatch,
+    center: DVec3,
+    u: &[Vec<f64>],
+    sums: &mut BodySums,
+    weight: impl Fn(f64, f64, usize) -> [f64; N] + Sync,
+) -> [Moments; N] {
+    const ZERO: [f64; 16] = [0.0; 16];
+    let [dx, dy, _] = patch.dims;
+    let empty = (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
+    if patch.is_empty() {
+        return [empty; N];
+    }
+    let rows = patch.len() / dx;
+    let dv = grid.cell_volume();
+    let dim = grid.dim;
+    assert!(
+        N <= MAX_WEIGHTS,
+        "integrate_n: at most {MAX_WEIGHTS} weights"
+    );
+    sums.rows[..N * rows]
+        .par_chunks_mut(N)
+        .enumerate()
+        .for_each(|(r, acc)| {
+            let (b, c) = (r % dy, r / dy);
+            let mut s = [ZERO; N];
+            for a in 0..dx {
+                let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
+                let g = grid.idx(i, j, k);
+                let w = weight(patch.chi[r * dx + a], patch.phi[r * dx + a], g);
+                if w.iter().all(|&chi| chi == 0.0) {
+                    continue;
+                }
+                let p = grid.pos(i, j, k);
+                let rv = DVec3::new(p[0], p[1], p[2]) - center;
+                let uv = DVec3::new(u[0][g], u[1][g], if dim == 3 { u[2][g] } else { 0.0 });
+                let m = rv.cross(uv);
+                for (s, &chi) in s.iter_mut().zip(&w) {
+                    if chi == 0.0 {
+                        continue;
+                    }
+                    s[0] += chi;
+                    s[1] += chi * uv.x;
+                    s[2] += chi * uv.y;
+                    s[3] += chi * uv.z;
+                    s[4] += chi * m.x;
+                    s[5] += chi * m.y;
+                    s[6] += chi * m.z;
+                    s[7] += chi * rv.x * rv.x;
+                    s[8] += chi * rv.y * rv.y;
+                    s[9] += chi * rv.z * rv.z;
+                    s[10] += chi * rv.x * rv.y;
+                    s[11] += chi * rv.x * rv.z;
+                    s[12] += chi * rv.y * rv.z;
+                    s[13] += chi * rv.x;
+                    s[14] += chi * rv.y;
+                    s[15] += chi * rv.z;
+                }
+            }
+            acc.copy_from_slice(&s);
+        });
+    std::array::from_fn(|q| {
+        let mut t = [0.0; 16];
+        for s in sums.rows[..N * rows].chunks(N) {
+            for (t, v) in t.iter_mut().zip(&s[q]) {
+                *t += v;
+            }
+        }
+        moments(center, dv, t).unwrap_or(empty)
+    })
+}
+
+/// The moments from the weight's sums `t` (before the cell volume `dv`); `None` when ∫χ is 0.
+fn moments(center: DVec3, dv: f64, mut t: [f64; 16]) -> Option<Moments> {
+    for v in &mut t {
+        *v *= dv;
+    }
+    let vol = t[0];
+    // (A weight may be negative: the mass of a body lighter than the fluid beyond the
+    // fluid's.)
+    if vol == 0.0 {
+        return None;
+    }
+    // Shift the moments from the centre c to the centroid x_G = c + d.
+    let d = DVec3::new(t[13], t[14], t[15]) / vol;
+    let mom = DVec3::new(t[1], t[2], t[3]);
+    let ang = DVec3::new(t[4], t[5], t[6]) - d.cross(mom);
+    let (xx, yy, zz) = (
+        t[7] - vol * d.x * d.x,
+        t[8] - vol * d.y * d.y,
+        t[9] - vol * d.z * d.z,
+    );
+    let (xy, xz, yz) = (
+        t[10] - vol * d.x * d.y,
+        t[11] - vol * d.x * d.z,
+        t[12] - vol * d.y * d.z,
+    );
+    let j = DMat3::from_cols(
+        DVec3::new(yy + zz, -xy, -xz),
+        DVec3::new(-xy, xx + zz, -yz),
+        DVec3::new(-xz, -yz, xx + yy),
+    );
+    Some((vol, center + d, mom, ang, j))
+}
+
+/// Volume, centroid and inertia of a moving body from χ (the body the density field
+/// carries) into `state`; a kinematic body also takes its prescribed velocities. Returns
+/// whether the body's velocity is still to be found (a dynamic body with a non-empty χ).
+pub fn mass_properties(
+    grid: &Grid,
+    patch: &GridPatch,
+    u: &[Vec<f64>],
+    sums: &mut BodySums,
+    body: &Body,
+    t: f64,
+    state: &mut RigidState,
+) -> bool {
+    let (vol, centroid, _, _, j) = integrate(grid, patch, state.center, u, sums, |c, _, _| c);
+    state.volume = vol;
+    state.centroid = centroid;
+    state.inertia = j;
+    if let Some((v, w)) = kinematic_velocity(&body.kind, t) {
+        state.velocity = v;
+        state.angular_velocity = w;
+        return false;
+    }
+    vol > 0.0
+}
