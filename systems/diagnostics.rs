@@ -18,23 +18,21 @@
 //! number of threads. Fields that no system changed since the last step (a vacuum run's) are
 //! not measured again: their sample is the last one.
 
-use crate::base::fields::{Fields, Params, Sample, SimTime};
+use crate::base::fields::{Failure, Fields, Params, Sample, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::TimeStep;
 use crate::bodies::{Body, BodyShape, Material, RigidState};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
-/// Diagnostics state: the latest sample, the reference for the blow-up guard and, once the run
-/// must stop, why.
+/// Diagnostics state: the latest sample and the reference for the blow-up guard (why the run
+/// must stop, once it must, is the [`Failure`] resource).
 #[derive(Resource, Debug, Clone)]
 pub struct Diagnostics {
     /// The state after the last step.
     pub sample: Sample,
     /// max|ω| at the start (reference for the blow-up guard).
     pub omega0: f64,
-    /// Set when the run must stop: what went wrong, where and when.
-    pub failure: Option<String>,
     /// Fallback step when nothing else bounds dt (fluid at rest, no dt_max).
     pub dt_fallback: f64,
     rows: Vec<RowStats>,
@@ -69,7 +67,6 @@ impl Diagnostics {
         Diagnostics {
             sample: Sample::default(),
             omega0: 0.0,
-            failure: None,
             dt_fallback,
             rows: vec![RowStats::default(); grid.n[1] * grid.n[2]],
         }
@@ -408,12 +405,13 @@ pub fn diagnostics_init(
     bodies: Bodies,
     mut time: ResMut<SimTime>,
     mut diag: ResMut<Diagnostics>,
+    mut failure: ResMut<Failure>,
 ) {
     let (mut s, at) = diag.measure(&grid, &fields);
     s.t = time.t;
     diag.omega0 = s.max_omega;
     if let Some(i) = at.nan_at {
-        diag.failure = Some(format!(
+        failure.reason = Some(format!(
             "the initial fields are not finite at {}",
             place(&grid, i, &bodies)
         ));
@@ -445,6 +443,7 @@ pub fn diagnostics(
     bodies: Bodies,
     mut time: ResMut<SimTime>,
     mut diag: ResMut<Diagnostics>,
+    mut failure: ResMut<Failure>,
 ) {
     time.t += time.dt;
     time.step += 1;
@@ -458,7 +457,7 @@ pub fn diagnostics(
     s.dt = time.dt;
     let step = time.step;
     if let Some(i) = at.nan_at {
-        diag.failure = Some(format!(
+        failure.reason = Some(format!(
             "blow-up: the velocity or vorticity is not finite at {} after step {step} (t = {:.6})",
             place(&grid, i, &bodies),
             time.t
@@ -466,7 +465,7 @@ pub fn diagnostics(
     } else if let Some(limit) = rest_speed_limit(&grid, &params, diag.omega0)
         && s.max_u > limit
     {
-        diag.failure = Some(format!(
+        failure.reason = Some(format!(
             "blow-up: max|u| = {:.4e} at {} after step {step} (t = {:.6}) exceeds {limit:.4e}, √blowup_factor times the speed of a free fall across the box (a flow that starts at rest and is driven by gravity cannot get there); max|ω| = {:.4e} at {}; reduce the time step (numerics.dt) or refine the grid",
             s.max_u,
             place(&grid, at.u_at, &bodies),
@@ -475,7 +474,7 @@ pub fn diagnostics(
             place(&grid, at.omega_at, &bodies),
         ));
     } else if diag.omega0 > 0.0 && s.max_omega > params.blowup_factor * diag.omega0 {
-        diag.failure = Some(format!(
+        failure.reason = Some(format!(
             "blow-up: max|ω| = {:.4e} at {} after step {step} (t = {:.6}) exceeds {} times its initial value {:.4e}; reduce the time step (numerics.dt) or refine the grid",
             s.max_omega,
             place(&grid, at.omega_at, &bodies),
@@ -486,7 +485,7 @@ pub fn diagnostics(
     } else if let TimeStep::Fixed(dt) = params.dt_policy
         && s.max_u * dt / grid.h > 20.0
     {
-        diag.failure = Some(format!(
+        failure.reason = Some(format!(
             "blow-up: max|u| dt / h = {:.1} at {} after step {step} (t = {:.6}), far beyond the CFL limit; use a smaller fixed dt or an Adaptive step",
             s.max_u * dt / grid.h,
             place(&grid, at.u_at, &bodies),

@@ -7,10 +7,9 @@
 //! do not accumulate. Only the nodes of the box the body (plus a band) can reach are sampled;
 //! χ_i = H_ε(φ_i) is the smoothed Heaviside of half-width ε = `interface_cells` h.
 
-use crate::base::fields::{Params, SimTime};
+use crate::base::fields::{Failure, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::bodies::{Body, BodyShape, GridPatch, RigidState, heaviside};
-use crate::systems::diagnostics::Diagnostics;
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -21,7 +20,7 @@ pub fn level_sets(
     params: Res<Params>,
     time: Res<SimTime>,
     mut bodies: Query<(&Body, &RigidState, &BodyShape, &mut GridPatch)>,
-    mut diag: ResMut<Diagnostics>,
+    mut failure: ResMut<Failure>,
 ) {
     let eps = params.interface_cells * grid.h;
     for (body, state, shape, mut patch) in &mut bodies {
@@ -33,8 +32,8 @@ pub fn level_sets(
             let outside = (0..grid.dim).any(|a| {
                 state.center[a] < grid.origin[a] || state.center[a] > grid.origin[a] + ext[a]
             });
-            if outside && diag.failure.is_none() {
-                diag.failure = Some(format!(
+            if outside && failure.reason.is_none() {
+                failure.reason = Some(format!(
                     "body `{}` left the domain at step {} (t = {:.6}): centre {:?}; add walls (a static body) or enlarge the domain",
                     body.name,
                     time.step,
@@ -45,9 +44,9 @@ pub fn level_sets(
         }
         let outside = sample(&grid, state, shape, &mut patch, eps);
         if let Some(axis) = outside
-            && diag.failure.is_none()
+            && failure.reason.is_none()
         {
-            diag.failure = Some(format!(
+            failure.reason = Some(format!(
                 "body `{}` reaches outside the periodic box along {} at step {} (t = {:.6}): \
                  centre {:?}; its level set would be clipped at the box's last nodes, not \
                  wrapped around; move it inside, enlarge the domain or add walls",

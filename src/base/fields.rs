@@ -193,6 +193,15 @@ pub struct SimTime {
     pub stop_at: Option<f64>,
 }
 
+/// Why the run must stop, once it must: what went wrong, where and when (`None` while all is
+/// well). Set by the systems that check the state (a body leaving the box in `level_sets`, a
+/// blow-up in `diagnostics`); the simulation stops after the step that set it.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct Failure {
+    /// The message the run stops with.
+    pub reason: Option<String>,
+}
+
 /// Global diagnostics of the current state.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Sample {

@@ -44,7 +44,7 @@
 //! oldest beyond `output.checkpoints_kept` are deleted ([`prune`], only files of that name).
 //! `--restart DIR` takes the latest ([`resolve`]).
 
-use crate::base::fields::{Fields, Sample, SimTime};
+use crate::base::fields::{Failure, Fields, Sample, SimTime};
 use crate::bodies::{Body, ContactState, FreeMotion, Hydro, PreviousVelocity, RigidState};
 use crate::io::output::atomic_write_with;
 use crate::scene::{Scene, ValidScene};
@@ -718,8 +718,8 @@ impl Checkpoint {
             d.sample = self.sample;
             d.omega0 = self.omega0;
             d.dt_fallback = self.dt_fallback;
-            d.failure = None;
         }
+        sim.world.resource_mut::<Failure>().reason = None;
         sim.world
             .resource_mut::<TransportScratch>()
             .set_reverse(self.reverse);

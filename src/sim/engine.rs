@@ -1,6 +1,6 @@
 //! The simulation: a `bevy_ecs` world holding the resources, and the two schedules.
 
-use crate::base::fields::{Fields, Params, Sample, SimTime, Timings};
+use crate::base::fields::{Failure, Fields, Params, Sample, SimTime, Timings};
 use crate::base::grid::Grid;
 use crate::scene::ValidScene;
 use crate::schedule::{Mode, Plugin, Scheduler, StateRecord};
@@ -71,6 +71,7 @@ impl Simulation {
             ..Default::default()
         });
         world.insert_resource(Timings::default());
+        world.insert_resource(Failure::default());
         let n_bodies = crate::sim::build::spawn_bodies(&mut world, &scene, &grid)?;
         if n_bodies > 0 {
             world.insert_resource(crate::bodies::BodyFields::new(
@@ -177,7 +178,7 @@ impl Simulation {
 
     /// Why the run must stop, if it must.
     pub fn failure(&self) -> Option<String> {
-        self.world.resource::<Diagnostics>().failure.clone()
+        self.world.resource::<Failure>().reason.clone()
     }
 
     /// The scene being run.

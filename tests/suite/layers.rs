@@ -1,6 +1,7 @@
 //! The crate's modules are layers and dependencies point one way (README, "The code"): a file
 //! may name `crate::m` only for a module `m` of its own layer or a lower one. This test reads
-//! every source file and fails on any reference that points up, so a cycle cannot come back.
+//! every source file and fails on any reference that points up, so a cycle cannot come back;
+//! and no file in `systems/` names another system.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -97,6 +98,55 @@ fn dependencies_point_down_the_layers() {
     assert!(
         bad.is_empty(),
         "dependencies pointing up:\n{}",
+        bad.join("\n")
+    );
+}
+
+/// The systems share no code with each other: a file in `systems/` names no sibling
+/// (`crate::systems::x`, or `super::x` from the top of the file); what two systems share lives
+/// in a lower layer (the curl and the line sweeps in `solvers`, the body integrals and the
+/// pressure coupling's state in `bodies`, the run's failure in `base::fields`). Only
+/// `systems/mod.rs`, which lists them, names them.
+#[test]
+fn systems_do_not_import_each_other() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("systems");
+    let mut files = Vec::new();
+    rust_files(&dir, &mut files);
+    let siblings: Vec<String> = files
+        .iter()
+        .filter_map(|f| f.file_stem())
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| s != "mod")
+        .collect();
+    assert!(siblings.len() > 10, "only {} systems found", siblings.len());
+    let mut bad = Vec::new();
+    for f in files.iter().filter(|f| !f.ends_with("mod.rs")) {
+        let text = fs::read_to_string(f).unwrap();
+        for (ln, line) in text.lines().enumerate() {
+            let names_parent = line.contains("crate::systems::")
+                || line.starts_with("use super::")
+                || line.starts_with("pub use super::")
+                || line.match_indices("super::").any(|(i, _)| {
+                    let after = &line[i + "super::".len()..];
+                    let name: String = after
+                        .chars()
+                        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                        .collect();
+                    name == "super" || siblings.contains(&name)
+                });
+            if names_parent {
+                bad.push(format!(
+                    "systems/{}:{}: {}",
+                    f.file_name().unwrap().to_string_lossy(),
+                    ln + 1,
+                    line.trim()
+                ));
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "a system names another system (move what they share to a lower layer):\n{}",
         bad.join("\n")
     );
 }
