@@ -16,9 +16,14 @@
 //! `add_plugin` call on the simulation builder). Every system added through a plugin is timed
 //! under its name into [`Timings`]: no system carries timing code.
 //!
-//! Within one set, the systems are chained in the order they were added (plugin order, then
-//! order within a plugin). What a run does is decided by [`Mode`] (vacuum or fluid, with or
-//! without bodies), which each plugin reads in `build`.
+//! The order of a step is stated once, in [`PhysicsSet::ALL`]: each built-in set holds the
+//! systems of one plugin (collision's two run in the order it adds them), so the order of the
+//! plugin list does not matter. Within a set that several plugins use (`First` and `Last`),
+//! systems are chained in the order they were added: the built-in plugins first, then the
+//! plugins of the builder in the order they were added. The startup schedule runs through the
+//! same sets in the same order ([`PluginContext::add_startup_system_in`]). What a run does is
+//! decided by [`Mode`] (vacuum or fluid, with or without bodies), which each plugin reads in
+//! `build`.
 
 use crate::base::fields::{Params, Timings};
 use bevy_ecs::prelude::*;
@@ -30,14 +35,17 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-/// The named stages of a step, in order. Sets without built-in systems yet are the places
-/// where the body physics plugs in.
+/// The named stages of a step, in order (see [`PhysicsSet::ALL`]); each built-in system has
+/// its own set, or shares one with the systems of its own plugin only.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PhysicsSet {
     /// Empty: user systems that run before everything else.
     First,
     /// Sample body level sets on the grid (section 3.1).
     LevelSets,
+    /// The density of the fluid phases, ρ_P (the free surface's, section 5), which the
+    /// density of the bodies is added to.
+    PhaseDensity,
     /// Characteristic functions and density (eq. 19).
     Density,
     /// Rigid velocity of each body from the flow (eq. 7).
@@ -47,7 +55,10 @@ pub enum PhysicsSet {
     Collision,
     /// Implicit penalization (eqs. 13, 27).
     Penalization,
-    /// Baroclinic vorticity generation (eq. 28).
+    /// The variable-density pressure projection (eqs. 14, 16), which adds the penalization's
+    /// curl (`body_coupling: Pressure`, the default).
+    Pressure,
+    /// Baroclinic vorticity generation (eq. 28; `body_coupling: Baroclinic` or `Momentum`).
     Baroclinic,
     /// Particle push, stretching and remeshing (eqs. 29-30).
     Transport,
@@ -58,6 +69,9 @@ pub enum PhysicsSet {
     /// The free surface carried by the new velocity, redistanced, its volume restored
     /// (section 5).
     FreeSurface,
+    /// In vacuum, the bodies' velocities from gravity and contact (before they move with
+    /// them: symplectic Euler).
+    FreeMotion,
     /// Move the bodies.
     RigidUpdate,
     /// Clock, time step, global quantities, blow-up guard.
@@ -68,18 +82,21 @@ pub enum PhysicsSet {
 
 impl PhysicsSet {
     /// Every set, in schedule order.
-    pub const ALL: [PhysicsSet; 14] = [
+    pub const ALL: [PhysicsSet; 17] = [
         PhysicsSet::First,
         PhysicsSet::LevelSets,
+        PhysicsSet::PhaseDensity,
         PhysicsSet::Density,
         PhysicsSet::RigidVelocity,
         PhysicsSet::Collision,
         PhysicsSet::Penalization,
+        PhysicsSet::Pressure,
         PhysicsSet::Baroclinic,
         PhysicsSet::Transport,
         PhysicsSet::Diffusion,
         PhysicsSet::Poisson,
         PhysicsSet::FreeSurface,
+        PhysicsSet::FreeMotion,
         PhysicsSet::RigidUpdate,
         PhysicsSet::Diagnostics,
         PhysicsSet::Last,
@@ -108,19 +125,25 @@ fn configured(label: impl ScheduleLabel) -> Schedule {
     s
 }
 
-/// An empty step schedule: the sets chained once, in the order of [`PhysicsSet::ALL`],
-/// single-threaded, ambiguity an error.
-pub fn step_schedule() -> Schedule {
-    let mut s = configured(Step);
+/// An empty schedule labelled `label` whose sets are chained once, in the order of
+/// [`PhysicsSet::ALL`], single-threaded, ambiguity an error.
+fn chained(label: impl ScheduleLabel) -> Schedule {
+    let mut s = configured(label);
     for pair in PhysicsSet::ALL.windows(2) {
         s.configure_sets(pair[0].before(pair[1]));
     }
     s
 }
 
-/// An empty startup schedule (its systems run in the order they are added).
+/// An empty step schedule: the sets chained once, in the order of [`PhysicsSet::ALL`],
+/// single-threaded, ambiguity an error.
+pub fn step_schedule() -> Schedule {
+    chained(Step)
+}
+
+/// An empty startup schedule: the same sets in the same order as a step's.
 pub fn startup_schedule() -> Schedule {
-    configured(Startup)
+    chained(Startup)
 }
 
 /// What kind of run the world holds; plugins decide from it which systems to add.
@@ -210,7 +233,7 @@ pub struct Scheduler {
     pub startup: Schedule,
     sink: TimingSink,
     last_in_set: HashMap<PhysicsSet, &'static str>,
-    last_startup: Option<&'static str>,
+    last_in_startup_set: HashMap<PhysicsSet, &'static str>,
     names: Vec<&'static str>,
     state: Vec<StateEntry>,
 }
@@ -222,7 +245,7 @@ impl Default for Scheduler {
             startup: startup_schedule(),
             sink: TimingSink::default(),
             last_in_set: HashMap::new(),
-            last_startup: None,
+            last_in_startup_set: HashMap::new(),
             names: Vec::new(),
             state: Vec::new(),
         }
@@ -380,14 +403,14 @@ impl PluginContext<'_> {
         Ok(())
     }
 
-    /// Add `system` to the startup schedule, timed under `name`, after the startup systems
-    /// added before it.
-    pub fn add_startup_system<M>(
+    /// Add `system` to `set` of the startup schedule (run once before the first step), timed
+    /// under `name`, after the startup systems added to `set` before it.
+    pub fn add_startup_system_in<M>(
         &mut self,
+        set: PhysicsSet,
         name: &'static str,
         system: impl IntoSystem<(), (), M> + Send + Sync + 'static,
     ) -> anyhow::Result<()> {
-        let sname: &'static str = name;
         let timed = IntoAdapterSystem::new(
             Timed {
                 name,
@@ -395,13 +418,23 @@ impl PluginContext<'_> {
             },
             system,
         );
-        let prev = self.scheduler.last_startup.replace(sname);
+        let prev = self.scheduler.last_in_startup_set.insert(set, name);
         let s = &mut self.scheduler.startup;
         match prev {
-            Some(p) => s.add_systems(timed.in_set(Named(sname)).after(Named(p))),
-            None => s.add_systems(timed.in_set(Named(sname))),
+            Some(p) => s.add_systems(timed.in_set(set).in_set(Named(name)).after(Named(p))),
+            None => s.add_systems(timed.in_set(set).in_set(Named(name))),
         };
         Ok(())
+    }
+
+    /// Add `system` to the `Last` set of the startup schedule: after every built-in startup
+    /// system and the ones added there before it (see [`Self::add_startup_system_in`]).
+    pub fn add_startup_system<M>(
+        &mut self,
+        name: &'static str,
+        system: impl IntoSystem<(), (), M> + Send + Sync + 'static,
+    ) -> anyhow::Result<()> {
+        self.add_startup_system_in(PhysicsSet::Last, name, system)
     }
 
     /// Keep resource `R` across a checkpoint: it is saved as a record named `name` with

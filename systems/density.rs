@@ -79,9 +79,9 @@ impl crate::schedule::Plugin for DensityPlugin {
         let mode = ctx.mode();
         if mode.fluid() && mode.has_bodies() {
             ctx.add_system(PhysicsSet::Density, "density", density)?;
-            // The same before the first step (after `level_sets_init`), for the t = 0 state;
-            // the first step computes it again from the same patches.
-            ctx.add_startup_system("density_init", density)?;
+            // The same before the first step (after `level_sets_init` and the phases' density),
+            // for the t = 0 state; the first step computes it again from the same patches.
+            ctx.add_startup_system_in(PhysicsSet::Density, "density_init", density)?;
         }
         Ok(())
     }

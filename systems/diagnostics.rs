@@ -511,7 +511,11 @@ impl crate::schedule::Plugin for DiagnosticsPlugin {
         let grid = ctx.world.resource::<Grid>();
         let diag = Diagnostics::new(grid, end.map_or(f64::INFINITY, |t| t / 100.0));
         ctx.insert_resource(diag);
-        ctx.add_startup_system("diagnostics_init", diagnostics_init)?;
+        ctx.add_startup_system_in(
+            PhysicsSet::Diagnostics,
+            "diagnostics_init",
+            diagnostics_init,
+        )?;
         ctx.add_system(PhysicsSet::Diagnostics, "diagnostics", diagnostics)?;
         Ok(())
     }

@@ -81,7 +81,7 @@ impl crate::schedule::Plugin for FreeMotionPlugin {
         use crate::schedule::PhysicsSet;
         if ctx.mode().vacuum {
             ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
-            ctx.add_system(PhysicsSet::RigidUpdate, "free_motion", free_motion)?;
+            ctx.add_system(PhysicsSet::FreeMotion, "free_motion", free_motion)?;
         }
         Ok(())
     }

@@ -649,8 +649,12 @@ impl crate::schedule::Plugin for FreeSurfacePlugin {
         let grid = ctx.world.resource::<Grid>().clone();
         ctx.insert_resource(FreeSurfaceScratch::new(&grid));
         ctx.checkpoint_resource::<LiquidLevelSet>("free_surface", 1)?;
-        ctx.add_startup_system("free_surface_init", free_surface_init)?;
-        ctx.add_system(PhysicsSet::Density, "phase_density", phase_density)?;
+        ctx.add_startup_system_in(
+            PhysicsSet::PhaseDensity,
+            "free_surface_init",
+            free_surface_init,
+        )?;
+        ctx.add_system(PhysicsSet::PhaseDensity, "phase_density", phase_density)?;
         ctx.add_system(PhysicsSet::FreeSurface, "free_surface", free_surface)?;
         Ok(())
     }

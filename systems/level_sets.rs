@@ -254,7 +254,7 @@ impl crate::schedule::Plugin for LevelSetsPlugin {
         use crate::schedule::PhysicsSet;
         if ctx.mode().has_bodies() {
             ctx.add_system(PhysicsSet::LevelSets, "level_sets", level_sets)?;
-            ctx.add_startup_system("level_sets_init", level_sets_init)?;
+            ctx.add_startup_system_in(PhysicsSet::LevelSets, "level_sets_init", level_sets_init)?;
         }
         Ok(())
     }

@@ -37,7 +37,7 @@ impl crate::schedule::Plugin for PoissonPlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         ctx.share_resource(|w| Spectral::new(w.resource::<crate::base::grid::Grid>()));
-        ctx.add_startup_system("poisson", poisson)?;
+        ctx.add_startup_system_in(PhysicsSet::Poisson, "poisson", poisson)?;
         if ctx.mode().fluid() {
             ctx.add_system(PhysicsSet::Poisson, "poisson", poisson)?;
         }

@@ -398,7 +398,7 @@ impl crate::schedule::Plugin for PressurePlugin {
                 excess: vec![None; ids],
             });
             ctx.checkpoint_resource::<PressureState>("pressure", 3)?;
-            ctx.add_system(PhysicsSet::Baroclinic, "pressure", pressure)?;
+            ctx.add_system(PhysicsSet::Pressure, "pressure", pressure)?;
         }
         Ok(())
     }

@@ -1,6 +1,7 @@
 //! The schedule: the default one builds with ambiguity detection as an error, user systems
 //! hook into the empty First/Last sets, an ambiguous pair is rejected (added by hand or
-//! through a plugin), and every plugin system is timed under its name.
+//! through a plugin), every plugin system is timed under its name, and the built-in systems
+//! run in the one order stated below.
 
 use bevy_ecs::prelude::*;
 use tumble::scene::Scene;
@@ -156,4 +157,117 @@ fn sets_are_listed_in_order() {
         .iter()
         .position(|s| *s == PhysicsSet::Poisson);
     assert!(t < d && d < p);
+}
+
+/// The order of the built-in systems in a step, stated once (by `PhysicsSet::ALL`): every run
+/// runs these, in this order, less those its mode does not need (`pressure` and `baroclinic`
+/// are the two kinds of body coupling; `free_motion` replaces the flow in vacuum).
+const STEP_ORDER: &[&str] = &[
+    "level_sets",
+    "phase_density",
+    "density",
+    "rigid_velocity",
+    "collision",
+    "contact_impulse",
+    "penalization",
+    "pressure",
+    "baroclinic",
+    "transport",
+    "diffusion",
+    "poisson",
+    "free_surface",
+    "free_motion",
+    "rigid_update",
+    "diagnostics",
+];
+
+/// The order of the built-in startup systems (the same sets, in the same order).
+const STARTUP_ORDER: &[&str] = &[
+    "level_sets_init",
+    "free_surface_init",
+    "density_init",
+    "poisson",
+    "diagnostics_init",
+];
+
+/// Bodies under a free surface: every built-in system but the other coupling's and vacuum's.
+const BODIES_UNDER_WATER: &str = r#"Scene(
+    domain: (extent: [1.0, 1.0], cells: [32, 32]),
+    fluid: (gravity: [0.0, -1.0]),
+    free_surface: Some((gas_density: 0.1, liquid: [Below(height: 0.6)])),
+    numerics: (end_time: 0.1, dt: Fixed(0.001)COUPLING),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.0), kind: Static,
+         position: [0.5, 0.1]),
+        (name: "disk", shape: Disk(radius: 0.1), density: 2.0, position: [0.5, 0.4]),
+    ],
+)"#;
+
+/// The systems that ran in the last schedule run, in the order they ran.
+fn ran(s: &Simulation) -> Vec<&'static str> {
+    s.timings().last.iter().map(|e| e.0).collect()
+}
+
+/// Whether `names` appear in `order` in the same order.
+fn in_order(names: &[&str], order: &[&str]) -> bool {
+    let mut rest = order.iter();
+    names.iter().all(|n| rest.any(|o| o == n))
+}
+
+#[test]
+fn built_in_systems_run_in_the_stated_order() {
+    let text = BODIES_UNDER_WATER.replace("COUPLING", "");
+    let mut s = Simulation::new(Scene::parse(&text, "test", "test").unwrap()).unwrap();
+    assert_eq!(ran(&s), STARTUP_ORDER, "startup");
+    s.step().unwrap();
+    let expected: Vec<&str> = STEP_ORDER
+        .iter()
+        .copied()
+        .filter(|n| !["baroclinic", "free_motion"].contains(n))
+        .collect();
+    assert_eq!(ran(&s), expected, "a step with bodies under a free surface");
+}
+
+#[test]
+fn every_kind_of_run_keeps_the_stated_order() {
+    let vacuum = r#"Scene(
+    domain: (extent: [1.0, 1.0], cells: [32, 32]),
+    fluid: (gravity: [0.0, -10.0]),
+    vacuum: true,
+    numerics: (dt: Fixed(0.001), end_time: 0.1),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.0), kind: Static,
+         position: [0.5, 0.05]),
+        (name: "disk", shape: Disk(radius: 0.1), position: [0.5, 0.3]),
+    ],
+)"#;
+    // (A free surface needs the pressure coupling.)
+    let baroclinic = BODIES_UNDER_WATER
+        .replace("COUPLING", ", body_coupling: Baroclinic")
+        .replace(
+            "free_surface: Some((gas_density: 0.1, liquid: [Below(height: 0.6)])),",
+            "",
+        );
+    for (what, text, runs) in [
+        ("vacuum", vacuum, &["free_motion", "rigid_update"][..]),
+        (
+            "baroclinic",
+            baroclinic.as_str(),
+            &["density", "baroclinic"][..],
+        ),
+        ("fluid", SCENE, &["transport", "poisson"][..]),
+    ] {
+        let mut s = Simulation::new(Scene::parse(text, "test", "test").unwrap()).unwrap();
+        let startup = ran(&s);
+        assert!(
+            in_order(&startup, STARTUP_ORDER),
+            "{what} startup: {startup:?}"
+        );
+        s.step().unwrap();
+        let step = ran(&s);
+        assert!(in_order(&step, STEP_ORDER), "{what}: {step:?}");
+        for name in runs {
+            assert!(step.contains(name), "{what}: {name} is not in {step:?}");
+        }
+    }
 }
