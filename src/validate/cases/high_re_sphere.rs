@@ -19,10 +19,29 @@
 //!   terminal speed of the standard drag curve (Clift & Gauvin 1970), which this grid (6.4 cells
 //!   per radius, a boundary layer far thinner than a cell) is not expected to reach.
 
-use super::{Report, Row, dynamic_body};
+use super::common::dynamic_body;
 use crate::scene::Scene;
 use crate::sim::engine::Simulation;
 use crate::systems::diffusion::GridScaleDissipation;
+use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
+
+/// The case: what it checks, against what, and the rows known to fail.
+pub const CASE: Case = Case {
+    name: "high-re-sphere",
+    description: "a sphere of density 1.2 falling through water (nu = 1e-4 cgs, Re about 1.4e4, cell Reynolds number about 1000) with the default numerics: it runs to the end, rests on the floor of a closed box, the fluid's energy never grows once it rests, and the grid-scale dissipation removes the same energy per unit time at any step",
+    reference: "energy balance of a flow with no driving (dE/dt <= 0 once the body rests); the dissipation's rate per unit time (issue 32); the standard drag curve (Clift & Gauvin 1970) for the open box, printed only",
+    full: "closed box at 64^3 and 96^3 to t = 0.6, the dissipation at 1/2 and 1/4 of the step, the open periodic box 64x64x128 to t = 0.3",
+    quick: "closed box at 64^3 to t = 0.6, the dissipation at 1/2 and 1/4 of the step",
+    full_time: RunTime::Minutes,
+    quick_time: RunTime::Minutes,
+    run: high_re_sphere,
+    known_failures: &[KnownFailure {
+        row: "64^3: energy removed by the grid-scale dissipation by t = 0.1 at 0.25 of the step",
+        quick: true,
+        full: true,
+        why: "+18.7% (2.618e-3 against 2.206e-3, each interpolated to t = 0.1 between the steps around it; +4.4% at half the step). The dissipation is a rate per unit time, exactly (tests/suite/spectral.rs), but the state it acts on is not: the M'4 remesh, the method's other sink at the grid scale, damps a mode by O(delta^2) per step, so over a fixed time by O(dt), and at a smaller step more energy reaches the grid scale and the dissipation removes more. Taylor-Green at 64^3 shows the same: removed by t = 5 2.79e-4, 3.61e-4, 4.51e-4 at c = 0.5, 0.25, 0.125 (a per-step filter would remove 2 and 4 times as much); issue 32",
+    }],
+};
 
 /// Sphere radius, density, the water's viscosity and gravity (cgs).
 const RADIUS: f64 = 0.1;

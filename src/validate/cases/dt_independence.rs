@@ -1,0 +1,134 @@
+//! `dt-independence`: the terminal velocity of Table 1's d = 0.3, ν = 0.02 must not depend on the
+//! time step (issue 16).
+
+use super::common::{dynamic_body, tube_scene};
+use crate::sim::engine::Simulation;
+use crate::validate::PlotSpec;
+use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
+
+/// The case: what it checks, against what, and the rows known to fail.
+pub const CASE: Case = Case {
+    name: "dt-independence",
+    description: "Table 1's d = 0.3, nu = 0.02: terminal velocity within 1% at dt, dt/2 and dt/4 (dt the default adaptive step); a step shortened to land on an output time changes the velocity by less than 0.1% beyond the trend",
+    reference: "issue 16 (a converged method does not depend on the time step)",
+    full: "h = 1/48",
+    quick: "h = 1/32 (the same tolerances)",
+    full_time: RunTime::Minutes,
+    quick_time: RunTime::Minutes,
+    run: dt_independence,
+    known_failures: &[
+        KnownFailure {
+            row: "h = 1/32, Δt: velocity jump at a step shortened",
+            quick: true,
+            full: false,
+            why: "4.2% in the one shortened step (0.1% asked; 0.65% before the grid-scale dissipation of issue 32, which removes within a step whatever the penalization puts in the corners of the cube of wavenumbers, whatever the step's length; a weight summed per axis instead, which never does, gave 1.1% but let the high-re-sphere closed box blow up at t = 0.227): the drag depends on the step length (no-slip imposed once per step); issue 35",
+        },
+        KnownFailure {
+            row: "h = 1/32: U(t = 1.2) at Δt/2",
+            quick: true,
+            full: false,
+            why: "1.2634 against 1.2851 at Δt (-1.7%; before the grid-scale dissipation of issue 32: 1.2085 against 1.3233, -8.7%): the drag depends on ν Δt / h² and on the step; issue 35",
+        },
+        KnownFailure {
+            row: "h = 1/32: U(t = 1.2) at Δt/4",
+            quick: true,
+            full: false,
+            why: "1.1862 against 1.2851 at Δt (-7.7%; before the grid-scale dissipation of issue 32: 1.1831 against 1.3233, -10.6%); issue 35",
+        },
+        KnownFailure {
+            row: "h = 1/48: U(t = 1.2) at Δt/",
+            quick: false,
+            full: true,
+            why: "measured in the last session with the same coupling and Fixed steps 0.005, 0.0025, 0.00125: 1.3657, 1.3254, 1.2963 (-3.0%, -5.1%); issue 16",
+        },
+    ],
+};
+
+/// The Table 1 case d = 0.3, ν = 0.02 (radius 0.15, density 1.02, tube of diameter 1) at grid
+/// step `h` with the default adaptive step policy scaled by `scale` (c, diffusion number and
+/// CFL bound all times `scale`, no cap on Δt), run to t = 1.2 landing on the times in `land`
+/// first. Returns (t, U downwards) after every step.
+fn table1_run(h: f64, scale: f64, land: &[f64]) -> anyhow::Result<Vec<(f64, f64)>> {
+    let scene = tube_scene(h, 0.3, 0.02, None, |dt| {
+        *dt = crate::scene::TimeStep::Adaptive {
+            c: 0.5 * scale,
+            dt_max: None,
+            cfl: 4.0 * scale,
+            diffusion_number: 0.5 * scale,
+        }
+    })?;
+    let mut sim = Simulation::new(scene)?;
+    let mut curve = Vec::new();
+    for &t_stop in land.iter().chain([1.2].iter()) {
+        sim.set_stop_at(Some(t_stop));
+        while sim.time() < t_stop * (1.0 - 1e-12) {
+            sim.step()?;
+            let st = dynamic_body(&mut sim).ok_or_else(|| anyhow::anyhow!("no sphere"))?;
+            curve.push((sim.time(), -st.velocity.z));
+        }
+    }
+    Ok(curve)
+}
+
+/// The terminal velocity must not depend on the time step (issue 16): Table 1's d = 0.3,
+/// ν = 0.02 at Δt, Δt/2 and Δt/4 (Δt the default adaptive step), and a step shortened to land
+/// on an output time must not jump the body's velocity.
+fn dt_independence(quick: bool) -> anyhow::Result<Report> {
+    let mut rep = Report::new("dt-independence");
+    let h = if quick { 1.0 / 32.0 } else { 1.0 / 48.0 };
+    let hs = format!("1/{:.0}", 1.0 / h);
+    // A landing at t = 0.9537 (an arbitrary time well into the steady fall) in the Δt run.
+    let t_land = 0.9537;
+    let mut us = Vec::new();
+    let mut plot = PlotSpec::new(
+        "velocity",
+        format!("settling velocity, d = 0.3, ν = 0.02, h = {hs}"),
+        "t",
+        "U (downwards)",
+    );
+    for (scale, label) in [(1.0, "Δt"), (0.5, "Δt/2"), (0.25, "Δt/4")] {
+        let land: &[f64] = if scale == 1.0 { &[t_land] } else { &[] };
+        let curve = table1_run(h, scale, land)?;
+        let u = curve.last().map_or(f64::NAN, |e| e.1);
+        if scale == 1.0 {
+            // The landing step ends exactly on t_land; the velocity there against the line
+            // through the steps either side of it.
+            let i = curve
+                .iter()
+                .position(|e| (e.0 - t_land).abs() < 1e-9)
+                .ok_or_else(|| anyhow::anyhow!("no step landed on {t_land}"))?;
+            let ((ta, ua), (tl, ul), (tb, ub)) = (curve[i - 1], curve[i], curve[i + 1]);
+            let line = ua + (ub - ua) * (tl - ta) / (tb - ta);
+            rep.rows.push(Row::abs(
+                format!("h = {hs}, Δt: velocity jump at a step shortened to land on t = {t_land}, relative to U"),
+                0.0,
+                (ul - line).abs() / ul,
+                0.001,
+            ));
+            rep.notes.push(format!(
+                "landing step: from t = {ta:.5} to {tl:.5} (the steps either side are {:.5} and {:.5} long)",
+                tl - ta,
+                tb - tl
+            ));
+        }
+        plot = plot.measured(label, curve.clone());
+        us.push((label, u, curve.len()));
+    }
+    for &(label, u, _) in &us[1..] {
+        rep.rows.push(Row::rel(
+            format!("h = {hs}: U(t = 1.2) at {label} against Δt"),
+            us[0].1,
+            u,
+            0.01,
+        ));
+    }
+    rep.notes.push(format!(
+        "U(t = 1.2): {} (experiment U_E = 1.4359)",
+        us.iter()
+            .map(|(l, u, s)| format!("{l}: {u:.4} ({s} steps)"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    rep.plots.push(plot);
+    Ok(rep)
+}
