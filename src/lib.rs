@@ -20,6 +20,7 @@
 
 pub mod base;
 pub mod bodies;
+pub mod cli;
 pub mod io;
 pub mod run;
 pub mod scene;
