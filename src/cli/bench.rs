@@ -5,7 +5,6 @@ use crate::scene::ValidScene;
 use crate::schedule::PluginList;
 use crate::sim::engine::Simulation;
 use std::path::Path;
-use std::process::ExitCode;
 
 /// The median and the 90th percentile of `v` (sorted in place).
 fn median_p90(v: &mut [f64]) -> (f64, f64) {
@@ -24,7 +23,7 @@ fn median_p90(v: &mut [f64]) -> (f64, f64) {
 }
 
 /// `tumble bench SCENE`: time steps, print one JSON line.
-pub fn bench(path: &Path, steps: usize, warmup: usize, plugins: &PluginList) -> ExitCode {
+pub fn bench(path: &Path, steps: usize, warmup: usize, plugins: &PluginList) -> u8 {
     let scene = match super::load(path, plugins) {
         Ok(s) => s,
         Err(code) => return code,
@@ -32,11 +31,11 @@ pub fn bench(path: &Path, steps: usize, warmup: usize, plugins: &PluginList) -> 
     match measure(scene, steps, warmup, plugins) {
         Ok(line) => {
             println!("{line}");
-            ExitCode::SUCCESS
+            0
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            1
         }
     }
 }

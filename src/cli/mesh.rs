@@ -3,7 +3,6 @@
 use crate::bodies::meshgen::CupParams;
 use clap::Subcommand;
 use std::path::PathBuf;
-use std::process::ExitCode;
 
 #[derive(Subcommand)]
 pub enum MeshShape {
@@ -35,7 +34,7 @@ pub enum MeshShape {
 }
 
 /// `tumble mesh`: write the mesh asked for.
-pub fn mesh(shape: MeshShape) -> ExitCode {
+pub fn mesh(shape: MeshShape) -> u8 {
     let MeshShape::Cup {
         radius,
         height,
@@ -55,11 +54,11 @@ pub fn mesh(shape: MeshShape) -> ExitCode {
     match write_cup(&params, &out, force) {
         Ok(summary) => {
             println!("{summary}");
-            ExitCode::SUCCESS
+            0
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(2)
+            2
         }
     }
 }

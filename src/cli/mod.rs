@@ -123,6 +123,16 @@ pub fn main_from(
     args: impl IntoIterator<Item = impl Into<OsString> + Clone>,
     plugins: PluginList,
 ) -> ExitCode {
+    ExitCode::from(status(args, plugins))
+}
+
+/// [`main_from`]'s exit status: 0 done, 1 a failed run or case, 2 a mistake in the command,
+/// the scene, the output directory or the checkpoint, 130 a run interrupted (with a
+/// checkpoint).
+pub fn status(
+    args: impl IntoIterator<Item = impl Into<OsString> + Clone>,
+    plugins: PluginList,
+) -> u8 {
     let cli = Cli::parse_from(args);
     if let Some(code) = set_threads(cli.threads) {
         return code;
@@ -166,25 +176,25 @@ pub fn main_from(
 }
 
 /// Size rayon's global pool; an exit code if `--threads` is 0 or the pool cannot be made.
-fn set_threads(threads: Option<usize>) -> Option<ExitCode> {
+fn set_threads(threads: Option<usize>) -> Option<u8> {
     let n = threads?;
     if n == 0 {
         eprintln!("error: --threads must be at least 1");
-        return Some(ExitCode::from(2));
+        return Some(2);
     }
     if let Err(e) = rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build_global()
     {
         eprintln!("error: cannot set up {n} threads: {e}");
-        return Some(ExitCode::from(2));
+        return Some(2);
     }
     None
 }
 
 /// `tumble check`: load and validate a scene (its meshes and its plugin sections included),
 /// print what it will compute.
-fn check(path: &Path, plugins: &PluginList) -> ExitCode {
+fn check(path: &Path, plugins: &PluginList) -> u8 {
     let scene = match load(path, plugins) {
         Ok(s) => s,
         Err(code) => return code,
@@ -192,36 +202,36 @@ fn check(path: &Path, plugins: &PluginList) -> ExitCode {
     for b in &scene.bodies {
         if let Err(e) = b.shape.build(&scene.base_dir) {
             eprintln!("error: body `{}`: {e}", b.name);
-            return ExitCode::from(2);
+            return 2;
         }
     }
     print!("{}", crate::io::summary::describe(&scene));
     println!("scene `{}` is valid", scene.name);
-    ExitCode::SUCCESS
+    0
 }
 
 /// `tumble plot`: PNG plots next to a run's CSV files.
-fn plot(run_dir: &Path) -> ExitCode {
+fn plot(run_dir: &Path) -> u8 {
     match crate::io::plot::plot_run_dir(run_dir) {
         Ok(paths) => {
             for p in paths {
                 println!("{}", p.display());
             }
-            ExitCode::SUCCESS
+            0
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            1
         }
     }
 }
 
 /// Load and check a scene file, its plugin sections against the built-in plugins and
 /// `plugins`; on an error, print it and give exit status 2.
-fn load(path: &Path, plugins: &PluginList) -> Result<ValidScene, ExitCode> {
+fn load(path: &Path, plugins: &PluginList) -> Result<ValidScene, u8> {
     let fail = |e: &dyn std::fmt::Display| {
         eprintln!("error: {e}");
-        ExitCode::from(2)
+        2
     };
     let scene = Scene::load(path).map_err(|e: SceneError| fail(&e))?;
     let builtin = crate::systems::builtin();

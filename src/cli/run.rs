@@ -5,12 +5,11 @@ use crate::run::{
     BadOutputDir, RunOptions, RunSummary, is_refused_restart, restart_run, run_scene,
 };
 use std::path::Path;
-use std::process::ExitCode;
 
 /// `tumble run [SCENE] [--restart CHECKPOINT]`: exit status 0 when the run ends, 130 when it
 /// is interrupted (with a checkpoint), 2 for a mistake in the scene, the output directory or
 /// the checkpoint, 1 for a failure of the run.
-pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> ExitCode {
+pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> u8 {
     let loaded = match scene.map(|s| super::load(s, &opts.plugins)).transpose() {
         Ok(s) => s,
         Err(code) => return code,
@@ -27,20 +26,20 @@ pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> E
     match result {
         Ok(s) => {
             print_summary(&s);
-            ExitCode::SUCCESS
+            0
         }
         Err(e) if e.downcast_ref::<Interrupted>().is_some() => {
             eprintln!("{e}");
-            ExitCode::from(130)
+            130
         }
         Err(e) => {
             eprintln!("error: {e:#}");
             // A bad output directory is a usage mistake, like a bad scene; so is a checkpoint
             // that cannot be restarted.
             if e.is::<BadOutputDir>() || is_refused_restart(&e) {
-                ExitCode::from(2)
+                2
             } else {
-                ExitCode::from(1)
+                1
             }
         }
     }

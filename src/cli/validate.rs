@@ -3,7 +3,6 @@
 
 use crate::validate::{CASES, find_case};
 use std::path::Path;
-use std::process::ExitCode;
 
 /// `tumble validate [CASES..] [--quick] [--list] [--write-docs FILE] [--plots DIR]`: exit
 /// status 1 if a case fails.
@@ -13,7 +12,7 @@ pub fn validate(
     list: bool,
     write_docs: Option<&Path>,
     plots: &Path,
-) -> ExitCode {
+) -> u8 {
     if list {
         for c in CASES {
             println!(
@@ -21,7 +20,7 @@ pub fn validate(
                 c.name, c.description, c.reference, c.full_time, c.full, c.quick_time, c.quick
             );
         }
-        return ExitCode::SUCCESS;
+        return 0;
     }
     let mut selected = Vec::new();
     for name in cases {
@@ -32,7 +31,7 @@ pub fn validate(
                     "== {name}\n  error: unknown validation case `{name}`; the cases are: {}\nFAIL {name}",
                     CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
                 );
-                return ExitCode::from(1);
+                return 1;
             }
         }
     }
@@ -44,7 +43,7 @@ pub fn validate(
         && let Err(e) = crate::validate::docs::may_write(file)
     {
         eprintln!("error: {e}");
-        return ExitCode::from(2);
+        return 2;
     }
     let start = std::time::Instant::now();
     let mut reports = Vec::new();
@@ -98,15 +97,11 @@ pub fn validate(
         let text = crate::validate::docs::markdown(&reports, quick, &date, &machine, wall);
         if let Err(e) = std::fs::write(file, text) {
             eprintln!("error: cannot write {}: {e}", file.display());
-            return ExitCode::from(1);
+            return 1;
         }
         println!("wrote {}", file.display());
     }
-    if failed > 0 {
-        ExitCode::from(1)
-    } else {
-        ExitCode::SUCCESS
-    }
+    if failed > 0 { 1 } else { 0 }
 }
 
 /// Writes the plots of a validation report to `dir` (created if needed), printing one line
