@@ -15,13 +15,16 @@
 //! - [`scene`]: the RON scene format and its validation;
 //! - [`sim`]: the world built from a validated scene, the engine;
 //! - [`io`]: snapshots, checkpoints, log, plots;
-//! - [`run`] and [`validate`]: the run driver and the validation cases (the CLI sits on top).
+//! - [`run`] and [`validate`]: the run driver and the validation cases;
+//! - [`cli`]: the command line, which the `tumble` binary and a user's own binary (with its
+//!   plugins) both call.
 
 // Numerical kernels index several arrays with one loop variable; iterators would obscure them.
 #![allow(clippy::needless_range_loop)]
 
 pub mod base;
 pub mod bodies;
+pub mod cli;
 pub mod io;
 pub mod run;
 pub mod scene;

@@ -166,15 +166,173 @@ impl Mode {
     }
 }
 
-/// A physics system: its resources, its systems and their place in the schedule, and the
-/// state it keeps across a checkpoint.
+/// A physics system: its resources, its systems and their place in the schedule, its scene
+/// settings, its output fields and the state it keeps across a checkpoint.
 pub trait Plugin: Send + Sync + 'static {
-    /// A short name (used in errors).
+    /// A short name (used in errors, and the key of its scene section).
     fn name(&self) -> &'static str;
+    /// The scene section this plugin reads, `plugins: {"<name>": (..)}`, if it has settings:
+    /// [`Section::of`] its settings struct. The section is checked against it when a
+    /// simulation is set up and by `tumble check`, before anything is built; a scene whose
+    /// section no plugin reads is refused. Default: none.
+    fn section(&self) -> Option<Section> {
+        None
+    }
     /// Insert the resources and add the systems (see [`PluginContext`]). Only what the
     /// [`Mode`] needs should be added: a pure-fluid run does no body work at all.
     fn build(&self, ctx: &mut PluginContext) -> anyhow::Result<()>;
 }
+
+/// The plugins of a simulation beyond the built-in ones, shared by every simulation a run
+/// sets up (a restart sets up its own): what a user's binary hands to
+/// `tumble::cli::main_with` or puts in `RunOptions::plugins`.
+#[derive(Clone, Default)]
+pub struct PluginList(pub Vec<Arc<dyn Plugin>>);
+
+impl PluginList {
+    /// A list of one plugin more.
+    pub fn with(mut self, plugin: impl Plugin) -> Self {
+        self.0.push(Arc::new(plugin));
+        self
+    }
+}
+
+impl std::fmt::Debug for PluginList {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list()
+            .entries(self.0.iter().map(|p| p.name()))
+            .finish()
+    }
+}
+
+/// How a plugin's scene section is read: its settings type, as a parser that checks a section's
+/// RON text (see [`Plugin::section`]).
+#[derive(Clone, Copy)]
+pub struct Section {
+    check: fn(&str) -> Result<(), ron::error::SpannedError>,
+}
+
+impl Section {
+    /// The section of settings `T` (a `Deserialize` struct; give it
+    /// `#[serde(deny_unknown_fields)]` so a misspelt setting is an error).
+    pub fn of<T: DeserializeOwned>() -> Section {
+        Section {
+            check: |text| parse_section::<T>(text).map(|_| ()),
+        }
+    }
+}
+
+fn parse_section<T: DeserializeOwned>(text: &str) -> Result<T, ron::error::SpannedError> {
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str(text)
+}
+
+/// The plugins' sections of the scene a simulation is set up from (a resource while the
+/// plugins are built): the scene file, and each section's key, RON text and 1-based line and
+/// column of its first character in the file (`None` for a scene built or edited in code).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct PluginSections {
+    /// The scene file, as named in errors.
+    pub file: String,
+    /// The sections, in the scene's order of keys.
+    pub sections: Vec<SceneSection>,
+}
+
+/// One plugin section of a scene.
+#[derive(Debug, Clone)]
+pub struct SceneSection {
+    /// Its key: the name of the plugin that reads it.
+    pub key: String,
+    /// Its RON text.
+    pub text: String,
+    /// The 1-based line and column of its first character in the scene file, when known.
+    pub at: Option<(usize, usize)>,
+}
+
+impl PluginSections {
+    /// Check every section against the plugin of its key: a key no plugin of `plugins` has,
+    /// or a plugin without settings, or a section that does not parse as the plugin's
+    /// settings is an error naming the file, the line and the column.
+    pub fn check<'a>(
+        &self,
+        plugins: impl IntoIterator<Item = &'a dyn Plugin>,
+    ) -> anyhow::Result<()> {
+        let plugins: Vec<&dyn Plugin> = plugins.into_iter().collect();
+        for SceneSection { key, text, at } in &self.sections {
+            let Some(p) = plugins.iter().find(|p| p.name() == key) else {
+                let names: Vec<_> = plugins.iter().map(|p| p.name()).collect();
+                anyhow::bail!(
+                    "{}: `plugins` has a section \"{key}\" but no plugin of this simulation is \
+                     named so (its plugins: {})",
+                    self.locate(*at),
+                    names.join(", ")
+                );
+            };
+            let Some(section) = p.section() else {
+                anyhow::bail!(
+                    "{}: plugin `{key}` has no settings, but the scene gives it a section",
+                    self.locate(*at)
+                );
+            };
+            (section.check)(text).map_err(|e| self.parse_error(key, *at, &e))?;
+        }
+        Ok(())
+    }
+
+    /// The settings of plugin `key`: its section parsed as `T`, or `T::default()` without one.
+    pub fn settings<T: DeserializeOwned + Default>(&self, key: &str) -> anyhow::Result<T> {
+        match self.sections.iter().find(|s| s.key == key) {
+            Some(s) => parse_section::<T>(&s.text).map_err(|e| self.parse_error(key, s.at, &e)),
+            None => Ok(T::default()),
+        }
+    }
+
+    fn parse_error(
+        &self,
+        key: &str,
+        at: Option<(usize, usize)>,
+        e: &ron::error::SpannedError,
+    ) -> anyhow::Error {
+        let (line, col) = (e.span.start.line, e.span.start.col);
+        let pos = at.map(|(l0, c0)| {
+            if line <= 1 {
+                (l0, c0 + col.saturating_sub(1))
+            } else {
+                (l0 + line - 1, col)
+            }
+        });
+        let column = pos.map_or(col, |p| p.1);
+        anyhow::anyhow!(
+            "{}, field `plugins.{key}`: {} (column {column})",
+            self.locate(pos),
+            e.code
+        )
+    }
+
+    fn locate(&self, at: Option<(usize, usize)>) -> String {
+        match at {
+            Some((l, _)) => format!("scene error in {}, line {l}", self.file),
+            None => format!("scene error in {}", self.file),
+        }
+    }
+}
+
+/// A field a plugin writes into the snapshots (VTK `fields_NNNNNN.vti` and HDF5), after the
+/// built-in ones, whenever the scene's `output.fields` asks for any field: its name in the
+/// files and how to read its components (1 for a scalar, `dim` or 3 for a vector; each one
+/// value per grid node, in the grid's flat order) from the world.
+#[derive(Clone, Copy)]
+pub struct OutputField {
+    /// The field's name in the files (unique among the snapshot's fields).
+    pub name: &'static str,
+    /// Its components, read from the world.
+    pub read: for<'w> fn(&'w World) -> Vec<&'w [f64]>,
+}
+
+/// The fields the plugins write (a resource, see [`PluginContext::output_field`]).
+#[derive(Resource, Clone, Default)]
+pub struct OutputFields(pub Vec<OutputField>);
 
 /// Wall-clock times of the systems run since the last [`Scheduler::collect_timings`].
 type TimingSink = Arc<Mutex<Vec<(&'static str, f64)>>>;
@@ -254,11 +412,11 @@ impl Default for Scheduler {
 
 impl Scheduler {
     /// Build `plugins` in order into `world` for `mode`.
-    pub fn build(
+    pub fn build<'a>(
         &mut self,
         world: &mut World,
         mode: Mode,
-        plugins: &[Box<dyn Plugin>],
+        plugins: impl IntoIterator<Item = &'a dyn Plugin>,
     ) -> anyhow::Result<()> {
         world.insert_resource(mode);
         for p in plugins {
@@ -355,6 +513,38 @@ impl PluginContext<'_> {
     /// The typed parameters.
     pub fn params(&self) -> &Params {
         self.world.resource::<Params>()
+    }
+
+    /// This plugin's settings from the scene's `plugins` section under its name (already
+    /// checked against its [`Plugin::section`]), or `T::default()` when the scene has none.
+    pub fn settings<T: DeserializeOwned + Default>(&self) -> anyhow::Result<T> {
+        match self.world.get_resource::<PluginSections>() {
+            Some(s) => s.settings(self.plugin),
+            None => Ok(T::default()),
+        }
+    }
+
+    /// Write a field into the snapshots (see [`OutputField`]); its name must not be taken.
+    pub fn output_field(&mut self, field: OutputField) -> anyhow::Result<()> {
+        const BUILT_IN: [&str; 7] = [
+            "omega",
+            "velocity",
+            "density",
+            "chi",
+            "phi",
+            "free_surface",
+            "TIME",
+        ];
+        let mut fields = self.world.get_resource_or_init::<OutputFields>();
+        if BUILT_IN.contains(&field.name) || fields.0.iter().any(|f| f.name == field.name) {
+            anyhow::bail!(
+                "plugin `{}`: the output field `{}` is already written",
+                self.plugin,
+                field.name
+            );
+        }
+        fields.0.push(field);
+        Ok(())
     }
 
     /// Insert a resource (replacing one of the same type).

@@ -26,6 +26,7 @@ use crate::io::checkpoint::RunProgress;
 use crate::io::output::{PvdSeries, VtkField, write_vti_compressed};
 use crate::io::surfaces::{SurfaceGeometry, SurfacePart, SurfaceSeries};
 use crate::scene::{FieldName, OutputFormat};
+use crate::schedule::OutputFields;
 use crate::sim::engine::Simulation;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -355,7 +356,7 @@ fn write_surfaces(
 /// band kept around each body, [`crate::bodies::band`]: where no body's band reaches, φ is
 /// -∞ in memory and readers choke on infinities and sentinels); then, with a free surface
 /// whose φ_w has one value per node and a scene asking for some field, `free_surface`
-/// (φ_w, > 0 in the liquid).
+/// (φ_w, > 0 in the liquid); then, likewise, the plugins' fields ([`OutputFields`]).
 fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
     let fl = sim.fields();
     let omega: Vec<&[f64]> = fl.omega().iter().map(|c| c.as_slice()).collect();
@@ -396,6 +397,15 @@ fn with_fields<R>(sim: &Simulation, f: impl FnOnce(&[VtkField]) -> R) -> R {
             name: "free_surface",
             components: &liquid,
         });
+    }
+    let plugin_fields: Vec<(&str, Vec<&[f64]>)> = match sim.world.get_resource::<OutputFields>() {
+        Some(o) if !sim.scene().output.fields.is_empty() => {
+            o.0.iter().map(|f| (f.name, (f.read)(&sim.world))).collect()
+        }
+        _ => Vec::new(),
+    };
+    for (name, components) in &plugin_fields {
+        vtk.push(VtkField { name, components });
     }
     f(&vtk)
 }

@@ -7,6 +7,7 @@ use crate::io::output::atomic_write;
 use crate::io::runlog::RunLog;
 use crate::io::snapshots::Snapshots;
 use crate::scene::{Scene, ValidScene};
+use crate::schedule::PluginList;
 use crate::sim::engine::Simulation;
 use crate::systems::diagnostics::LAND_TOLERANCE;
 use anyhow::Context;
@@ -34,6 +35,8 @@ pub struct RunOptions {
     pub quiet: bool,
     /// Simulated time between checkpoints, overriding the scene's `output.checkpoint_every`.
     pub checkpoint_every: Option<f64>,
+    /// Plugins beyond the built-in ones (a user's physics; see `tumble::cli::main_with`).
+    pub plugins: PluginList,
 }
 
 /// What a finished run reports.
@@ -154,7 +157,9 @@ fn start_run(scene: ValidScene, opts: &RunOptions, dir: PathBuf) -> anyhow::Resu
         .context("cannot write scene.ron")?;
     let end = scene.numerics.end_time;
     let every = scene.output.every;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = Simulation::builder(scene)
+        .add_plugins(&opts.plugins)
+        .build()?;
     let mut series = SeriesCsv::create(&dir.join("series.csv"), &sim)?;
     let mut bodies_csv = BodiesCsv::create(&dir.join("bodies.csv"), &sim)?;
     let contacts_csv = ContactsCsv::create(&dir.join("contacts.csv"), &sim)?;
@@ -257,7 +262,10 @@ pub fn restart_run(
                 .into());
         }
     }
-    let sim = ck.simulation(run_scene)?;
+    let mut sim = Simulation::builder(run_scene)
+        .add_plugins(&opts.plugins)
+        .build()?;
+    ck.restore(&mut sim)?;
     // The snapshots kept, their indexes and series.h5, read back (nothing is changed yet).
     let snaps = Snapshots::resume(&dir, &sim, p).map_err(|m| ck.error(m))?;
     // Checked: from here on the run directory is changed, and the log goes on.

@@ -50,9 +50,33 @@ pub struct Scene {
     /// (paper Fig. 1 and Fig. 9). Default: false.
     #[serde(default)]
     pub vacuum: bool,
+    /// The settings of plugins beyond the built-in ones, by plugin name:
+    /// `plugins: {"passive_scalar": (kappa: 1e-3)}`. Each section is checked by the plugin of
+    /// its name (see `crate::schedule::Plugin::section`) when the simulation is set up; a
+    /// section that no plugin of the simulation reads is an error. Default: none.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub plugins: std::collections::BTreeMap<String, PluginSection>,
     /// Directory that relative mesh paths are resolved against (the scene file's).
     #[serde(skip)]
     pub base_dir: std::path::PathBuf,
+}
+
+/// A plugin's section of a scene, kept as its RON text until the plugin reads it.
+#[derive(Deserialize, Serialize, Debug, Clone)]
+#[serde(transparent)]
+pub struct PluginSection(pub Box<ron::value::RawValue>);
+
+impl PluginSection {
+    /// The section's RON text.
+    pub fn text(&self) -> &str {
+        self.0.get_ron()
+    }
+}
+
+impl PartialEq for PluginSection {
+    fn eq(&self, other: &Self) -> bool {
+        self.text() == other.text()
+    }
 }
 
 /// A rigid body in the scene.

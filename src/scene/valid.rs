@@ -8,6 +8,7 @@ use super::format::Scene;
 use crate::base::grid::Grid;
 use crate::bodies::contact::KappaDefault;
 use crate::bodies::shapes::ShapeGeometry;
+use crate::schedule::{PluginSections, SceneSection};
 use std::path::Path;
 
 /// The largest liquid/gas density ratio at which the free-surface validation cases were run
@@ -25,6 +26,8 @@ pub struct ValidScene {
     file: String,
     /// The line of `free_surface.gas_density` in the text read, for the warnings.
     gas_line: Option<usize>,
+    /// Where each plugin section starts in the text read (1-based line and column).
+    plugin_at: Vec<(String, (usize, usize))>,
 }
 
 impl std::ops::Deref for ValidScene {
@@ -86,6 +89,24 @@ impl ValidScene {
         validate(scene, &file, None)
     }
 
+    /// The plugins' sections, for the plugins to check and read (see
+    /// [`crate::schedule::Plugin::section`]), located in the file read.
+    pub fn plugin_sections(&self) -> PluginSections {
+        PluginSections {
+            file: self.file.clone(),
+            sections: self
+                .scene
+                .plugins
+                .iter()
+                .map(|(k, v)| SceneSection {
+                    key: k.clone(),
+                    text: v.text().to_string(),
+                    at: self.plugin_at.iter().find(|a| &a.0 == k).map(|a| a.1),
+                })
+                .collect(),
+        }
+    }
+
     /// The scene itself, for a caller that only reads or serialises it.
     pub fn into_inner(self) -> Scene {
         self.scene
@@ -105,12 +126,41 @@ fn validate(mut scene: Scene, file: &str, text: Option<&str>) -> Result<ValidSce
         )
     });
     Ok(ValidScene {
+        plugin_at: text.map(plugin_starts).unwrap_or_default(),
         scene,
         grid,
         geoms,
         file: file.to_string(),
         gas_line,
     })
+}
+
+/// Where each section of `plugins` starts in `text` (1-based line and column): the sections
+/// read again, borrowed from the text, so that their addresses give their offsets.
+fn plugin_starts(text: &str) -> Vec<(String, (usize, usize))> {
+    #[derive(serde::Deserialize)]
+    #[serde(rename = "Scene")]
+    struct Sections<'a> {
+        #[serde(borrow, default)]
+        plugins: std::collections::BTreeMap<String, &'a ron::value::RawValue>,
+    }
+    let opts =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let Ok(s) = opts.from_str::<Sections>(text) else {
+        return Vec::new();
+    };
+    s.plugins
+        .into_iter()
+        .filter_map(|(k, raw)| {
+            let ron = raw.get_ron();
+            let skip = ron.len() - ron.trim_start().len();
+            let off = (ron.as_ptr() as usize).checked_sub(text.as_ptr() as usize)? + skip;
+            let before = text.get(..off)?;
+            let line = before.matches('\n').count() + 1;
+            let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            Some((k, (line, col)))
+        })
+        .collect()
 }
 
 impl Scene {

@@ -3,7 +3,7 @@
 use crate::base::fields::{Failure, Fields, Params, Sample, SimTime, Timings};
 use crate::base::grid::Grid;
 use crate::scene::ValidScene;
-use crate::schedule::{Mode, Plugin, Scheduler, StateRecord};
+use crate::schedule::{Mode, Plugin, PluginList, PluginSections, Scheduler, StateRecord};
 use crate::sim::init::add_initial;
 use crate::systems::diagnostics::{BodyItem, BodyMotion, Diagnostics};
 use bevy_ecs::prelude::*;
@@ -22,22 +22,35 @@ pub struct Simulation {
 /// A simulation being set up: the scene and the plugins beyond the built-in ones.
 pub struct SimulationBuilder {
     scene: ValidScene,
-    plugins: Vec<Box<dyn Plugin>>,
+    plugins: PluginList,
 }
 
 impl SimulationBuilder {
     /// Add a plugin; it is built after the built-in ones (and the plugins added before it),
     /// so within a set its systems run after theirs.
     pub fn add_plugin(mut self, plugin: impl Plugin) -> Self {
-        self.plugins.push(Box::new(plugin));
+        self.plugins = self.plugins.with(plugin);
         self
     }
 
-    /// Set up the world (see [`Simulation::new`]).
+    /// Add every plugin of `plugins`, in order.
+    pub fn add_plugins(mut self, plugins: &PluginList) -> Self {
+        self.plugins.0.extend(plugins.0.iter().cloned());
+        self
+    }
+
+    /// Check the scene's plugin sections against the plugins, then set up the world (see
+    /// [`Simulation::new`]).
     pub fn build(self) -> anyhow::Result<Simulation> {
-        let mut plugins = crate::systems::builtin();
-        plugins.extend(self.plugins);
-        Simulation::with_plugins(self.scene, &plugins)
+        let builtin = crate::systems::builtin();
+        let plugins: Vec<&dyn Plugin> = builtin
+            .iter()
+            .map(|p| p.as_ref())
+            .chain(self.plugins.0.iter().map(|p| p.as_ref()))
+            .collect();
+        let sections = self.scene.plugin_sections();
+        sections.check(plugins.iter().copied())?;
+        Simulation::with_plugins(self.scene, sections, &plugins)
     }
 }
 
@@ -53,11 +66,15 @@ impl Simulation {
     pub fn builder(scene: ValidScene) -> SimulationBuilder {
         SimulationBuilder {
             scene,
-            plugins: Vec::new(),
+            plugins: PluginList::default(),
         }
     }
 
-    fn with_plugins(scene: ValidScene, plugins: &[Box<dyn Plugin>]) -> anyhow::Result<Self> {
+    fn with_plugins(
+        scene: ValidScene,
+        sections: PluginSections,
+        plugins: &[&dyn Plugin],
+    ) -> anyhow::Result<Self> {
         let grid = scene.grid();
         let mut world = World::new();
         let mut fields = Fields::new(&grid);
@@ -87,8 +104,10 @@ impl Simulation {
             vacuum: scene.vacuum,
             bodies: n_bodies,
         };
+        world.insert_resource(sections);
         let mut scheduler = Scheduler::default();
-        scheduler.build(&mut world, mode, plugins)?;
+        scheduler.build(&mut world, mode, plugins.iter().copied())?;
+        world.remove_resource::<PluginSections>();
         let mut startup = std::mem::take(&mut scheduler.startup);
         startup
             .initialize(&mut world)

@@ -18,6 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["io"],
     &["run"],
     &["validate"],
+    &["cli"],
 ];
 
 fn rank(module: &str) -> Option<usize> {
