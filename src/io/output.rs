@@ -809,23 +809,45 @@ impl PvdSeries {
     }
 }
 
-/// A CSV time series: a header line, then one row of numbers per call to
-/// [`row`](CsvWriter::row), flushed to the OS after every row.
+/// The one CSV dialect every file tumble writes uses: RFC 4180 through the `csv` crate, `\n`
+/// line ends, a field quoted only if it needs it (a comma, a double quote or a line break,
+/// as a body name may have; numbers never do), no header of its own (the caller writes it).
+pub fn csv_writer<W: Write>(w: W) -> csv::Writer<W> {
+    csv::WriterBuilder::new()
+        .has_headers(false)
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(w)
+}
+
+/// The I/O error inside a `csv` crate error (the only kind a writer of records of one length
+/// returns), else the error as `Other`.
+fn csv_io(e: csv::Error) -> io::Error {
+    if !e.is_io_error() {
+        return io::Error::other(e);
+    }
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        _ => unreachable!("is_io_error"),
+    }
+}
+
+/// A CSV time series ([`csv_writer`]): a header line, then one row per call to
+/// [`row`](CsvWriter::row) (numbers, flushed to the OS after every row) or
+/// [`record`](CsvWriter::record) (text fields such as body names, quoted as needed, flushed
+/// by [`flush`](CsvWriter::flush)).
 #[derive(Debug)]
 pub struct CsvWriter {
-    w: BufWriter<File>,
+    w: csv::Writer<File>,
     columns: usize,
     path: PathBuf,
 }
 
 impl CsvWriter {
-    /// Creates (truncates) `path` and writes the comma-separated `header`.
+    /// Creates (truncates) `path` and writes the `header`.
     pub fn create(path: &Path, header: &[&str]) -> io::Result<Self> {
         let start = || {
-            let file = File::create(path)?;
-            let mut w = BufWriter::with_capacity(1 << 16, file);
-            w.write_all(header.join(",").as_bytes())?;
-            w.write_all(b"\n")?;
+            let mut w = csv_writer(File::create(path)?);
+            w.write_record(header).map_err(csv_io)?;
             w.flush()?;
             Ok(w)
         };
@@ -841,34 +863,40 @@ impl CsvWriter {
     pub fn append(path: &Path, columns: usize) -> io::Result<Self> {
         let file = fs::OpenOptions::new().append(true).open(path)?;
         Ok(CsvWriter {
-            w: BufWriter::with_capacity(1 << 16, file),
+            w: csv_writer(file),
             columns,
             path: path.to_path_buf(),
         })
     }
 
-    /// Appends one row; values are written so that they parse back exactly. Fails with
-    /// `InvalidInput` if the number of values differs from the number of header columns.
+    /// Appends one row of numbers, written as [`fmt_f64`] prints them (they parse back
+    /// exactly), and flushes it. Fails with `InvalidInput` if the number of values differs
+    /// from the number of header columns.
     pub fn row(&mut self, values: &[f64]) -> io::Result<()> {
-        if values.len() != self.columns {
+        self.record(values.iter().map(|v| fmt_f64(*v)))?;
+        self.flush()
+    }
+
+    /// Appends one row of text fields (numbers formatted by the caller, names quoted as
+    /// needed); buffered until [`flush`](CsvWriter::flush). Fails with `InvalidInput` if the
+    /// number of fields differs from the number of header columns.
+    pub fn record<I, T>(&mut self, fields: I) -> io::Result<()>
+    where
+        I: IntoIterator<Item = T>,
+        T: AsRef<[u8]>,
+    {
+        let mut r = csv::ByteRecord::with_capacity(self.columns * 24, self.columns);
+        r.extend(fields);
+        if r.len() != self.columns {
             return Err(invalid_input(format!(
                 "CSV row has {} values, header has {} columns",
-                values.len(),
+                r.len(),
                 self.columns
             )));
         }
-        let mut line = String::with_capacity(values.len() * 24);
-        for (i, v) in values.iter().enumerate() {
-            if i > 0 {
-                line.push(',');
-            }
-            line.push_str(&fmt_f64(*v));
-        }
-        line.push('\n');
         self.w
-            .write_all(line.as_bytes())
-            .and_then(|()| self.w.flush())
-            .map_err(|e| disk_full(&self.path, e))
+            .write_byte_record(&r)
+            .map_err(|e| disk_full(&self.path, csv_io(e)))
     }
 
     /// Flushes buffered output to the OS.
