@@ -5,6 +5,9 @@
 #[allow(dead_code)]
 #[path = "suite/common.rs"]
 mod common;
+#[allow(dead_code)]
+#[path = "suite/vti.rs"]
+mod vti;
 
 use common::Scratch;
 use std::path::{Path, PathBuf};
@@ -579,8 +582,8 @@ fn killed_run_leaves_whole_files_and_restarts() {
             continue;
         }
         if name.ends_with(".vti") {
-            let v = tumble::io::output::read_vti(&out.join(&name))
-                .unwrap_or_else(|e| panic!("{name} is torn: {e}"));
+            let v =
+                vti::read_vti(&out.join(&name)).unwrap_or_else(|e| panic!("{name} is torn: {e}"));
             assert!(v.time.is_some());
         }
         if name == "scene.ron" {

@@ -204,27 +204,26 @@ impl TriangleMesh {
         s
     }
 
-    /// The mesh as binary STL: an 80-byte header (`header`, cut or padded with spaces; it
-    /// must not start with `solid`, which would read as ASCII STL), the triangle count, then
-    /// per triangle its unit normal and corners as f32 (coordinates rounded to f32).
+    /// The mesh as binary STL, written by `stl_io`: an 80-byte header (`header`, cut or padded
+    /// with spaces; it must not start with `solid`, which would read as ASCII STL), the
+    /// triangle count, then per triangle its unit normal and corners as f32 (coordinates
+    /// rounded to f32).
     pub fn to_binary_stl(&self, header: &str) -> Vec<u8> {
+        let f32s = |v: DVec3| stl_io::Vector::new(v.to_array().map(|x| x as f32));
+        let triangles = self.triangles.iter().map(|t| {
+            let [a, b, c] = t.map(|i| self.vertices[i as usize]);
+            stl_io::Triangle {
+                normal: f32s((b - a).cross(c - a).normalize_or_zero()),
+                vertices: [a, b, c].map(f32s),
+            }
+        });
         let mut out = Vec::with_capacity(84 + 50 * self.triangles.len());
-        let mut head = [b' '; 80];
+        stl_io::write_stl(&mut out, triangles).expect("writing to memory does not fail");
+        // stl_io leaves the header zero: ours says what wrote the file.
         let text = header.as_bytes();
         let n = text.len().min(80);
-        head[..n].copy_from_slice(&text[..n]);
-        out.extend_from_slice(&head);
-        out.extend_from_slice(&(self.triangles.len() as u32).to_le_bytes());
-        for t in &self.triangles {
-            let [a, b, c] = t.map(|i| self.vertices[i as usize]);
-            let normal = (b - a).cross(c - a).normalize_or_zero();
-            for v in [normal, a, b, c] {
-                for x in v.to_array() {
-                    out.extend_from_slice(&(x as f32).to_le_bytes());
-                }
-            }
-            out.extend_from_slice(&0u16.to_le_bytes());
-        }
+        out[..n].copy_from_slice(&text[..n]);
+        out[n..80].fill(b' ');
         out
     }
 }

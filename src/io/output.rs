@@ -6,20 +6,16 @@
 //! fsynced and renamed over the target, so a run killed at any moment leaves either the old
 //! or the new file, never a torn one. The `.pvd` is rewritten after each snapshot is
 //! complete, so it only ever lists complete snapshots.
-//!
-//! [`read_vti`] reads back exactly the format [`write_vti`] produces, so tests check the
-//! output rather than assume it.
 
 use std::fmt::Write as _;
 use std::fs::{self, File};
-use std::io::{self, BufWriter, Read, Write};
+use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::base::grid::Grid;
 use crate::scene::format::Precision;
 use flate2::Compression;
-use flate2::read::ZlibDecoder;
 use flate2::write::ZlibEncoder;
 use rayon::prelude::*;
 
@@ -31,10 +27,6 @@ static TMP_SEQ: AtomicU64 = AtomicU64::new(0);
 
 fn invalid_input(msg: impl Into<String>) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidInput, msg.into())
-}
-
-fn invalid_data(msg: impl Into<String>) -> io::Error {
-    io::Error::new(io::ErrorKind::InvalidData, msg.into())
 }
 
 /// Atomically replaces `path` with `bytes` (see [`atomic_write_with`]).
@@ -168,15 +160,6 @@ fn xml_escape(s: &str) -> String {
         }
     }
     out
-}
-
-/// Inverse of [`xml_escape`].
-fn xml_unescape(s: &str) -> String {
-    s.replace("&lt;", "<")
-        .replace("&gt;", ">")
-        .replace("&quot;", "\"")
-        .replace("&apos;", "'")
-        .replace("&amp;", "&")
 }
 
 /// One named point field for [`write_vti`].
@@ -429,318 +412,6 @@ fn vti_head(
     head
 }
 
-/// What [`read_vti`] found in a `.vti` file.
-#[derive(Clone, Debug, PartialEq)]
-pub struct VtiData {
-    /// `x0 x1 y0 y1 z0 z1` (inclusive node ranges).
-    pub whole_extent: [usize; 6],
-    pub origin: [f64; 3],
-    pub spacing: [f64; 3],
-    /// The `TIME` field-data value, if present.
-    pub time: Option<f64>,
-    /// `(name, number of components, values)` per point array, in file order; values are
-    /// interleaved per point (x fastest), so `values.len() == points * components`.
-    pub arrays: Vec<(String, usize, Vec<f64>)>,
-}
-
-/// Splits the inside of a tag (`Name attr="v" ...`, without `<`/`>`) into its name and
-/// attributes (values unescaped).
-fn parse_tag(tag: &str) -> io::Result<(String, Vec<(String, String)>)> {
-    let tag = tag.trim().trim_end_matches('/').trim_end();
-    let (name, mut rest) = match tag.find(char::is_whitespace) {
-        Some(i) => (&tag[..i], &tag[i..]),
-        None => (tag, ""),
-    };
-    let mut attrs = Vec::new();
-    loop {
-        rest = rest.trim_start();
-        if rest.is_empty() {
-            break;
-        }
-        let eq = rest
-            .find('=')
-            .ok_or_else(|| invalid_data(format!("bad attribute in <{tag}>")))?;
-        let key = rest[..eq].trim().to_string();
-        let after = rest[eq + 1..].trim_start();
-        let quote = after
-            .chars()
-            .next()
-            .filter(|&c| c == '"' || c == '\'')
-            .ok_or_else(|| invalid_data(format!("unquoted attribute in <{tag}>")))?;
-        let body = &after[1..];
-        let end = body
-            .find(quote)
-            .ok_or_else(|| invalid_data(format!("unterminated attribute in <{tag}>")))?;
-        attrs.push((key, xml_unescape(&body[..end])));
-        rest = &body[end + 1..];
-    }
-    Ok((name.to_string(), attrs))
-}
-
-fn attr<'a>(attrs: &'a [(String, String)], key: &str) -> Option<&'a str> {
-    attrs
-        .iter()
-        .find(|(k, _)| k == key)
-        .map(|(_, v)| v.as_str())
-}
-
-fn need_attr<'a>(attrs: &'a [(String, String)], key: &str, tag: &str) -> io::Result<&'a str> {
-    attr(attrs, key).ok_or_else(|| invalid_data(format!("<{tag}> lacks {key}")))
-}
-
-fn parse_nums<T: std::str::FromStr, const N: usize>(s: &str, what: &str) -> io::Result<[T; N]> {
-    let v: Vec<T> = s
-        .split_whitespace()
-        .map(|t| t.parse::<T>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| invalid_data(format!("bad {what}: {s:?}")))?;
-    v.try_into()
-        .map_err(|_| invalid_data(format!("{what} needs {N} numbers: {s:?}")))
-}
-
-/// Reads a `.vti` file in exactly the formats [`write_vti`] and [`write_vti_compressed`]
-/// write (Float32 or Float64 arrays, raw appended data with `UInt64` little-endian headers,
-/// uncompressed or zlib-compressed, `TIME` as ascii field data); values come back as `f64`.
-pub fn read_vti(path: &Path) -> io::Result<VtiData> {
-    let bytes = fs::read(path)?;
-    let marker = b"<AppendedData";
-    let app = bytes
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .ok_or_else(|| invalid_data("no <AppendedData>"))?;
-    let tag_end = app
-        + bytes[app..]
-            .iter()
-            .position(|&b| b == b'>')
-            .ok_or_else(|| invalid_data("unterminated <AppendedData>"))?;
-    let (_, app_attrs) = parse_tag(
-        std::str::from_utf8(&bytes[app + 1..tag_end])
-            .map_err(|_| invalid_data("non-UTF-8 <AppendedData>"))?,
-    )?;
-    if attr(&app_attrs, "encoding") != Some("raw") {
-        return Err(invalid_data("AppendedData encoding is not raw"));
-    }
-    let underscore = tag_end
-        + bytes[tag_end..]
-            .iter()
-            .position(|&b| b == b'_')
-            .ok_or_else(|| invalid_data("no '_' starting the appended data"))?;
-    let data = &bytes[underscore + 1..];
-    let header =
-        std::str::from_utf8(&bytes[..app]).map_err(|_| invalid_data("non-UTF-8 XML header"))?;
-
-    let mut whole_extent = None;
-    let mut origin = None;
-    let mut spacing = None;
-    let mut time = None;
-    let mut compressed = false;
-    // (name, components, offset, bytes per value)
-    let mut specs: Vec<(String, usize, usize, usize)> = Vec::new();
-    let mut in_point = false;
-    let mut in_field = false;
-
-    let mut rest = header;
-    while let Some(lt) = rest.find('<') {
-        let gt = rest[lt..]
-            .find('>')
-            .map(|g| lt + g)
-            .ok_or_else(|| invalid_data("unterminated tag"))?;
-        let inner = &rest[lt + 1..gt];
-        let after = &rest[gt + 1..];
-        rest = after;
-        if inner.starts_with('?') || inner.starts_with('!') {
-            continue;
-        }
-        if let Some(closing) = inner.strip_prefix('/') {
-            match closing.trim() {
-                "PointData" => in_point = false,
-                "FieldData" => in_field = false,
-                _ => {}
-            }
-            continue;
-        }
-        let self_closing = inner.trim_end().ends_with('/');
-        let (name, attrs) = parse_tag(inner)?;
-        match name.as_str() {
-            "VTKFile" => {
-                if attr(&attrs, "type") != Some("ImageData") {
-                    return Err(invalid_data("not an ImageData VTKFile"));
-                }
-                if attr(&attrs, "byte_order") != Some("LittleEndian") {
-                    return Err(invalid_data("byte_order is not LittleEndian"));
-                }
-                if attr(&attrs, "header_type") != Some("UInt64") {
-                    return Err(invalid_data("header_type is not UInt64"));
-                }
-                compressed = match attr(&attrs, "compressor") {
-                    None => false,
-                    Some("vtkZLibDataCompressor") => true,
-                    Some(c) => return Err(invalid_data(format!("unknown compressor {c:?}"))),
-                };
-            }
-            "ImageData" => {
-                whole_extent = Some(parse_nums::<usize, 6>(
-                    need_attr(&attrs, "WholeExtent", &name)?,
-                    "WholeExtent",
-                )?);
-                origin = Some(parse_nums::<f64, 3>(
-                    need_attr(&attrs, "Origin", &name)?,
-                    "Origin",
-                )?);
-                spacing = Some(parse_nums::<f64, 3>(
-                    need_attr(&attrs, "Spacing", &name)?,
-                    "Spacing",
-                )?);
-            }
-            "PointData" => in_point = !self_closing,
-            "FieldData" => in_field = !self_closing,
-            "DataArray" if in_point => {
-                let arr_name = need_attr(&attrs, "Name", &name)?.to_string();
-                let size = match need_attr(&attrs, "type", &name)? {
-                    "Float64" => 8,
-                    "Float32" => 4,
-                    t => {
-                        return Err(invalid_data(format!(
-                            "array {arr_name:?} is {t}, not Float32 or Float64"
-                        )));
-                    }
-                };
-                if need_attr(&attrs, "format", &name)? != "appended" {
-                    return Err(invalid_data(format!("array {arr_name:?} is not appended")));
-                }
-                let nc = match attr(&attrs, "NumberOfComponents") {
-                    Some(s) => s
-                        .trim()
-                        .parse::<usize>()
-                        .map_err(|_| invalid_data("bad NumberOfComponents"))?,
-                    None => 1,
-                };
-                let off = need_attr(&attrs, "offset", &name)?
-                    .trim()
-                    .parse::<usize>()
-                    .map_err(|_| invalid_data("bad offset"))?;
-                specs.push((arr_name, nc, off, size));
-            }
-            "DataArray" if in_field && attr(&attrs, "Name") == Some("TIME") => {
-                if self_closing {
-                    return Err(invalid_data("empty TIME array"));
-                }
-                let text_end = after
-                    .find('<')
-                    .ok_or_else(|| invalid_data("unterminated TIME array"))?;
-                let text = after[..text_end].trim();
-                let first = text
-                    .split_whitespace()
-                    .next()
-                    .ok_or_else(|| invalid_data("empty TIME array"))?;
-                time = Some(
-                    first
-                        .parse::<f64>()
-                        .map_err(|_| invalid_data(format!("bad TIME {first:?}")))?,
-                );
-            }
-            _ => {}
-        }
-    }
-
-    let whole_extent = whole_extent.ok_or_else(|| invalid_data("no <ImageData>"))?;
-    let origin = origin.ok_or_else(|| invalid_data("no Origin"))?;
-    let spacing = spacing.ok_or_else(|| invalid_data("no Spacing"))?;
-    let mut npts = 1usize;
-    for a in 0..3 {
-        let (lo, hi) = (whole_extent[2 * a], whole_extent[2 * a + 1]);
-        if hi < lo {
-            return Err(invalid_data("empty WholeExtent"));
-        }
-        npts *= hi - lo + 1;
-    }
-
-    let mut arrays = Vec::with_capacity(specs.len());
-    for (name, nc, off, size) in specs {
-        let expected = npts * nc * size;
-        let raw = if compressed {
-            inflate_array(data, off, expected)
-                .map_err(|e| invalid_data(format!("array {name:?}: {e}")))?
-        } else {
-            let head = data
-                .get(off..off + 8)
-                .ok_or_else(|| invalid_data(format!("array {name:?}: offset past end")))?;
-            let nbytes = u64::from_le_bytes(head.try_into().unwrap()) as usize;
-            if nbytes != expected {
-                return Err(invalid_data(format!(
-                    "array {name:?}: {nbytes} bytes, expected {expected}"
-                )));
-            }
-            data.get(off + 8..off + 8 + nbytes)
-                .ok_or_else(|| invalid_data(format!("array {name:?}: truncated")))?
-                .to_vec()
-        };
-        let values = if size == 8 {
-            raw.chunks_exact(8)
-                .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-                .collect()
-        } else {
-            raw.chunks_exact(4)
-                .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64)
-                .collect()
-        };
-        arrays.push((name, nc, values));
-    }
-
-    Ok(VtiData {
-        whole_extent,
-        origin,
-        spacing,
-        time,
-        arrays,
-    })
-}
-
-/// The `expected` bytes of the zlib-compressed array at `off` in the appended `data` (see
-/// [`zlib_array`] for the layout).
-fn inflate_array(data: &[u8], off: usize, expected: usize) -> Result<Vec<u8>, String> {
-    let word = |i: usize| -> Result<usize, String> {
-        let at = off + 8 * i;
-        data.get(at..at + 8)
-            .map(|b| u64::from_le_bytes(b.try_into().unwrap()) as usize)
-            .ok_or_else(|| "compression header past the end".to_string())
-    };
-    let (nblocks, bs, last) = (word(0)?, word(1)?, word(2)?);
-    let total = match (nblocks, last) {
-        (0, _) => 0,
-        (n, 0) => n * bs,
-        (n, l) => (n - 1) * bs + l,
-    };
-    if total != expected {
-        return Err(format!("{total} bytes, expected {expected}"));
-    }
-    let mut pos = off + 8 * (3 + nblocks);
-    let mut out = Vec::with_capacity(expected);
-    for k in 0..nblocks {
-        let len = word(3 + k)?;
-        let block = data
-            .get(pos..pos + len)
-            .ok_or_else(|| "truncated compressed data".to_string())?;
-        let before = out.len();
-        ZlibDecoder::new(block)
-            .read_to_end(&mut out)
-            .map_err(|e| format!("bad zlib block {k}: {e}"))?;
-        let want = if k + 1 == nblocks && last != 0 {
-            last
-        } else {
-            bs
-        };
-        if out.len() - before != want {
-            return Err(format!(
-                "block {k} inflates to {} bytes, expected {want}",
-                out.len() - before
-            ));
-        }
-        pos += len;
-    }
-    Ok(out)
-}
-
 /// A ParaView `.pvd` collection indexing a time series of snapshot files.
 ///
 /// Each [`push`](PvdSeries::push) rewrites the whole file atomically, so call it only after
@@ -809,23 +480,45 @@ impl PvdSeries {
     }
 }
 
-/// A CSV time series: a header line, then one row of numbers per call to
-/// [`row`](CsvWriter::row), flushed to the OS after every row.
+/// The one CSV dialect every file tumble writes uses: RFC 4180 through the `csv` crate, `\n`
+/// line ends, a field quoted only if it needs it (a comma, a double quote or a line break,
+/// as a body name may have; numbers never do), no header of its own (the caller writes it).
+pub fn csv_writer<W: Write>(w: W) -> csv::Writer<W> {
+    csv::WriterBuilder::new()
+        .has_headers(false)
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(w)
+}
+
+/// The I/O error inside a `csv` crate error (the only kind a writer of records of one length
+/// returns), else the error as `Other`.
+fn csv_io(e: csv::Error) -> io::Error {
+    if !e.is_io_error() {
+        return io::Error::other(e);
+    }
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        _ => unreachable!("is_io_error"),
+    }
+}
+
+/// A CSV time series ([`csv_writer`]): a header line, then one row per call to
+/// [`row`](CsvWriter::row) (numbers, flushed to the OS after every row) or
+/// [`record`](CsvWriter::record) (text fields such as body names, quoted as needed, flushed
+/// by [`flush`](CsvWriter::flush)).
 #[derive(Debug)]
 pub struct CsvWriter {
-    w: BufWriter<File>,
+    w: csv::Writer<File>,
     columns: usize,
     path: PathBuf,
 }
 
 impl CsvWriter {
-    /// Creates (truncates) `path` and writes the comma-separated `header`.
+    /// Creates (truncates) `path` and writes the `header`.
     pub fn create(path: &Path, header: &[&str]) -> io::Result<Self> {
         let start = || {
-            let file = File::create(path)?;
-            let mut w = BufWriter::with_capacity(1 << 16, file);
-            w.write_all(header.join(",").as_bytes())?;
-            w.write_all(b"\n")?;
+            let mut w = csv_writer(File::create(path)?);
+            w.write_record(header).map_err(csv_io)?;
             w.flush()?;
             Ok(w)
         };
@@ -841,34 +534,40 @@ impl CsvWriter {
     pub fn append(path: &Path, columns: usize) -> io::Result<Self> {
         let file = fs::OpenOptions::new().append(true).open(path)?;
         Ok(CsvWriter {
-            w: BufWriter::with_capacity(1 << 16, file),
+            w: csv_writer(file),
             columns,
             path: path.to_path_buf(),
         })
     }
 
-    /// Appends one row; values are written so that they parse back exactly. Fails with
-    /// `InvalidInput` if the number of values differs from the number of header columns.
+    /// Appends one row of numbers, written as [`fmt_f64`] prints them (they parse back
+    /// exactly), and flushes it. Fails with `InvalidInput` if the number of values differs
+    /// from the number of header columns.
     pub fn row(&mut self, values: &[f64]) -> io::Result<()> {
-        if values.len() != self.columns {
+        self.record(values.iter().map(|v| fmt_f64(*v)))?;
+        self.flush()
+    }
+
+    /// Appends one row of text fields (numbers formatted by the caller, names quoted as
+    /// needed); buffered until [`flush`](CsvWriter::flush). Fails with `InvalidInput` if the
+    /// number of fields differs from the number of header columns.
+    pub fn record<I, T>(&mut self, fields: I) -> io::Result<()>
+    where
+        I: IntoIterator<Item = T>,
+        T: AsRef<[u8]>,
+    {
+        let mut r = csv::ByteRecord::with_capacity(self.columns * 24, self.columns);
+        r.extend(fields);
+        if r.len() != self.columns {
             return Err(invalid_input(format!(
                 "CSV row has {} values, header has {} columns",
-                values.len(),
+                r.len(),
                 self.columns
             )));
         }
-        let mut line = String::with_capacity(values.len() * 24);
-        for (i, v) in values.iter().enumerate() {
-            if i > 0 {
-                line.push(',');
-            }
-            line.push_str(&fmt_f64(*v));
-        }
-        line.push('\n');
         self.w
-            .write_all(line.as_bytes())
-            .and_then(|()| self.w.flush())
-            .map_err(|e| disk_full(&self.path, e))
+            .write_byte_record(&r)
+            .map_err(|e| disk_full(&self.path, csv_io(e)))
     }
 
     /// Flushes buffered output to the OS.

@@ -644,7 +644,7 @@ pub fn plot_run_dir(dir: &Path) -> Result<Vec<PathBuf>> {
     }
 
     // A run with a free surface: its liquid volume (an area in 2D) against t.
-    if table.header.contains(&"liquid_volume") {
+    if table.header.iter().any(|h| h == "liquid_volume") {
         let values = table.column("liquid_volume")?;
         let path = dir.join("liquid_volume.png");
         line_chart(
@@ -984,33 +984,49 @@ fn read(path: &Path) -> Result<String> {
 }
 
 /// A data row of a CSV file: its 1-based line number and its fields.
-struct Row<'a> {
-    line: usize,
-    fields: Vec<&'a str>,
+struct Row {
+    line: u64,
+    fields: csv::StringRecord,
 }
 
-/// A comma-separated file with a header line (no quoting; blank lines are ignored).
+/// A CSV file with a header line, read with the `csv` crate (RFC 4180: a quoted field may hold
+/// commas, double quotes and line breaks; blank lines and a leading byte order mark are
+/// ignored; header names are trimmed).
 struct Table<'a> {
     path: &'a Path,
-    header: Vec<&'a str>,
-    rows: Vec<Row<'a>>,
+    header: Vec<String>,
+    rows: Vec<Row>,
 }
 
 impl<'a> Table<'a> {
-    fn parse(path: &'a Path, text: &'a str) -> Result<Self> {
+    fn parse(path: &'a Path, text: &str) -> Result<Self> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l))
-            .filter(|(_, l)| !l.trim().is_empty());
-        let Some((_, head)) = lines.next() else {
+        let mut records = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .from_reader(text.as_bytes())
+            .into_records()
+            .map(|r| {
+                r.map_err(|e| {
+                    let line = e
+                        .position()
+                        .map_or(String::new(), |p| format!(":{}", p.line()));
+                    anyhow!("{}{line}: malformed CSV: {e}", path.display())
+                })
+            })
+            // A line of blanks only is a blank line too.
+            .filter(|r| {
+                r.as_ref()
+                    .map_or(true, |r| !(r.len() == 1 && r[0].trim().is_empty()))
+            });
+        let Some(head) = records.next().transpose()? else {
             bail!("{}: empty file, expected a header line", path.display());
         };
-        let header: Vec<&str> = head.split(',').map(str::trim).collect();
+        let header: Vec<String> = head.iter().map(|h| h.trim().to_string()).collect();
         let mut rows = Vec::new();
-        for (line, l) in lines {
-            let fields: Vec<&str> = l.split(',').collect();
+        for fields in records {
+            let fields = fields?;
+            let line = fields.position().map_or(0, csv::Position::line);
             ensure!(
                 fields.len() == header.len(),
                 "{}:{line}: malformed row: {} fields, the header has {}",
@@ -1025,7 +1041,7 @@ impl<'a> Table<'a> {
 
     /// The index of column `name`.
     fn col(&self, name: &str) -> Result<usize> {
-        self.header.iter().position(|h| *h == name).ok_or_else(|| {
+        self.header.iter().position(|h| h == name).ok_or_else(|| {
             anyhow!(
                 "{}: no `{name}` column in the header ({})",
                 self.path.display(),
@@ -1035,7 +1051,7 @@ impl<'a> Table<'a> {
     }
 
     /// The number in column `col` of `row`.
-    fn num(&self, row: &Row<'_>, col: usize) -> Result<f64> {
+    fn num(&self, row: &Row, col: usize) -> Result<f64> {
         let s = row.fields[col].trim();
         s.parse().map_err(|_| {
             anyhow!(

@@ -3,7 +3,7 @@
 
 use crate::base::fields::Sample;
 use crate::bodies::free_surface::LiquidLevelSet;
-use crate::io::output::CsvWriter;
+use crate::io::output::{CsvWriter, atomic_write, csv_writer};
 use crate::sim::engine::Simulation;
 use crate::systems::diffusion::GridScaleDissipation;
 use anyhow::Context;
@@ -96,39 +96,20 @@ impl SeriesCsv {
     }
 }
 
-/// A CSV file written through the `csv` crate: a body name with a comma, a quote or a line
-/// break is quoted as RFC 4180 says; numbers are written as Rust prints an `f64` (shortest
-/// text that reads back to the same value).
-type Csv = csv::Writer<std::fs::File>;
-
 /// Create `path` and write its `header` (comma-separated names, none needing quotes).
-fn create(path: &Path, header: &str) -> anyhow::Result<Csv> {
-    let f =
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut w = writer(f);
-    w.write_record(header.split(','))
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(w)
+fn create(path: &Path, header: &str) -> anyhow::Result<CsvWriter> {
+    let header: Vec<&str> = header.split(',').collect();
+    CsvWriter::create(path, &header).with_context(|| format!("cannot create {}", path.display()))
 }
 
-/// Open `path` (a file [`create`] made) to append rows: a restarted run.
-fn append(path: &Path) -> anyhow::Result<Csv> {
-    let f = std::fs::OpenOptions::new()
-        .append(true)
-        .open(path)
-        .with_context(|| format!("cannot open {}", path.display()))?;
-    Ok(writer(f))
-}
-
-fn writer(f: std::fs::File) -> Csv {
-    csv::WriterBuilder::new()
-        .has_headers(false)
-        .terminator(csv::Terminator::Any(b'\n'))
-        .from_writer(f)
+/// Open `path` (a file [`create`] made with `header`) to append rows: a restarted run.
+fn append(path: &Path, header: &str) -> anyhow::Result<CsvWriter> {
+    CsvWriter::append(path, header.split(',').count())
+        .with_context(|| format!("cannot open {}", path.display()))
 }
 
 /// `bodies.csv`: one row per moving body per step.
-pub struct BodiesCsv(Csv);
+pub struct BodiesCsv(CsvWriter);
 
 /// The header of `bodies.csv`.
 pub const BODIES_HEADER: &str = "t,id,name,x,y,z,vx,vy,vz,wx,wy,wz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz";
@@ -149,7 +130,7 @@ impl BodiesCsv {
 
     /// Open the file of an earlier run to append to it (a restart).
     pub fn append(path: &Path) -> anyhow::Result<Self> {
-        Ok(BodiesCsv(append(path)?))
+        Ok(BodiesCsv(append(path, BODIES_HEADER)?))
     }
 
     /// Append the current state of every moving body.
@@ -186,9 +167,7 @@ impl BodiesCsv {
             let record = [t.to_string(), b.id.to_string(), b.name.clone()]
                 .into_iter()
                 .chain(nums.iter().map(f64::to_string));
-            self.0
-                .write_record(record)
-                .context("cannot write bodies.csv")?;
+            self.0.record(record).context("cannot write bodies.csv")?;
         }
         Ok(())
     }
@@ -200,7 +179,7 @@ impl BodiesCsv {
 }
 
 /// `contacts.csv`: one row per close pair of bodies per step.
-pub struct ContactsCsv(Csv);
+pub struct ContactsCsv(CsvWriter);
 
 /// The header of `contacts.csv`.
 pub const CONTACTS_HEADER: &str = "t,body_a,body_b,gap,normal_force";
@@ -221,7 +200,7 @@ impl ContactsCsv {
 
     /// Open the file of an earlier run to append to it (a restart).
     pub fn append(path: &Path) -> anyhow::Result<Self> {
-        Ok(ContactsCsv(append(path)?))
+        Ok(ContactsCsv(append(path, CONTACTS_HEADER)?))
     }
 
     /// Append this step's close pairs.
@@ -236,7 +215,7 @@ impl ContactsCsv {
         let names = &sim.scene().bodies;
         for r in &c.records {
             self.0
-                .write_record([
+                .record([
                     t.as_str(),
                     names[r.a].name.as_str(),
                     names[r.b].name.as_str(),
@@ -252,4 +231,24 @@ impl ContactsCsv {
     pub fn flush(&mut self) -> anyhow::Result<()> {
         self.0.flush().context("cannot write contacts.csv")
     }
+}
+
+/// The header of `timings.csv`.
+pub const TIMINGS_HEADER: &str = "system,seconds_total,seconds_per_step";
+
+/// Write `timings.csv` at `path` atomically: per system its total seconds and the seconds per
+/// step over `steps` steps (at least 1), both to the microsecond.
+pub fn write_timings(path: &Path, seconds: &[(&str, f64)], steps: u64) -> anyhow::Result<()> {
+    let mut w = csv_writer(Vec::new());
+    let mut write = || -> csv::Result<()> {
+        w.write_record(TIMINGS_HEADER.split(','))?;
+        for (name, s) in seconds {
+            let per_step = s / steps.max(1) as f64;
+            w.write_record([*name, &format!("{s:.6}"), &format!("{per_step:.6}")])?;
+        }
+        Ok(())
+    };
+    write().context("cannot write timings.csv")?;
+    let bytes = w.into_inner().context("cannot write timings.csv")?;
+    atomic_write(path, &bytes).context("cannot write timings.csv")
 }

@@ -14,7 +14,10 @@ use anyhow::Context;
 pub mod csv;
 pub mod outdir;
 
-pub use csv::{BODIES_HEADER, BodiesCsv, CONTACTS_HEADER, ContactsCsv, SeriesCsv};
+pub use csv::{
+    BODIES_HEADER, BodiesCsv, CONTACTS_HEADER, ContactsCsv, SeriesCsv, TIMINGS_HEADER,
+    write_timings,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 pub use outdir::{MARKER, prepare_dir};
 use std::io::IsTerminal;
@@ -577,15 +580,11 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
         ),
     }
     crate::io::runlog::timings_table(&summary.system_seconds, summary.steps_run, wall);
-    let mut timing_lines = String::from("system,seconds_total,seconds_per_step\n");
-    for (name, s) in &summary.system_seconds {
-        timing_lines.push_str(&format!(
-            "{name},{s:.6},{:.6}\n",
-            s / summary.steps_run.max(1) as f64
-        ));
-    }
-    atomic_write(&dir.join("timings.csv"), timing_lines.as_bytes())
-        .context("cannot write timings.csv")?;
+    write_timings(
+        &dir.join("timings.csv"),
+        &summary.system_seconds,
+        summary.steps_run,
+    )?;
     // PNG plots of the time series (also after a stopped run: they show what happened). A
     // plot that cannot be drawn is a warning, not a failed run.
     match crate::io::plot::plot_run_dir(&dir) {

@@ -55,7 +55,7 @@ fn run_writes_outputs_and_refuses_to_overwrite() {
     // Snapshots at t = 0, 0.1, 0.2, each readable, with the time it claims.
     let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
-    let last = tumble::io::output::read_vti(&out.join("fields_000002.vti")).unwrap();
+    let last = crate::vti::read_vti(&out.join("fields_000002.vti")).unwrap();
     assert!((last.time.unwrap() - 0.2).abs() < 1e-12);
     assert_eq!(last.whole_extent, [0, 31, 0, 31, 0, 0]);
     // The series ends at the end time.
@@ -106,7 +106,7 @@ fn run_writes_outputs_and_refuses_to_overwrite() {
     assert!(!out.join("fields_000002.vti").exists());
     let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 2, "{pvd}");
-    let last = tumble::io::output::read_vti(&out.join("fields_000001.vti")).unwrap();
+    let last = crate::vti::read_vti(&out.join("fields_000001.vti")).unwrap();
     assert!((last.time.unwrap() - 0.05).abs() < 1e-12);
     let _ = std::fs::remove_dir_all(&d);
 }

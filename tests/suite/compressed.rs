@@ -5,9 +5,10 @@
 use std::fs;
 use std::io::Read;
 
+use crate::vti::read_vti;
 use flate2::read::ZlibDecoder;
 use tumble::base::grid::Grid;
-use tumble::io::output::{VtkField, read_vti, write_vti_compressed};
+use tumble::io::output::{VtkField, write_vti_compressed};
 use tumble::scene::Scene;
 use tumble::scene::format::Precision;
 

@@ -229,7 +229,7 @@ fn a_snapshot_holds_the_free_surface_field_part_and_slice() {
     );
 
     // The field: φ_w as given (single precision by default).
-    let vti = tumble::io::output::read_vti(&dir.join("fields_000000.vti")).unwrap();
+    let vti = crate::vti::read_vti(&dir.join("fields_000000.vti")).unwrap();
     let names: Vec<&str> = vti.arrays.iter().map(|a| a.0.as_str()).collect();
     assert_eq!(
         names,

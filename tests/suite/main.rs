@@ -32,3 +32,4 @@ mod stretching;
 mod surfaces;
 mod timestep;
 mod validation;
+mod vti;

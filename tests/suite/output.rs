@@ -6,11 +6,11 @@ use std::path::Path;
 
 use tumble::base::grid::Grid;
 use tumble::io::output::{
-    CsvWriter, PvdSeries, VtkField, atomic_write, atomic_write_with, peak_memory_bytes, read_vti,
-    write_vti,
+    CsvWriter, PvdSeries, VtkField, atomic_write, atomic_write_with, peak_memory_bytes, write_vti,
 };
 
 use crate::common::Scratch;
+use crate::vti::read_vti;
 
 /// This file's scratch directories.
 fn scratch(test: &str) -> Scratch {

@@ -356,6 +356,22 @@ fn plot_run_dir_errors_name_the_file() {
     assert!(err.contains("bodies.csv:3"), "{err}");
     assert!(err.contains("zero"), "{err}");
 
+    // A name with a comma left unquoted (a hand-edited file): one field too many, file and
+    // line; the quoted name on the line before reads as one field.
+    let d = run_dir("unquoted-name", 2);
+    std::fs::write(
+        d.join("bodies.csv"),
+        "t,id,name,x,y,z,vx,vy,vz,wx,wy,wz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz\n\
+         0,0,\"ball,red\",0,1,0,0,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0\n\
+         0.1,0,ball,red,0,1,0,0,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0\n",
+    )
+    .unwrap();
+    let err = format!("{:#}", plot_run_dir(&d).unwrap_err());
+    assert!(
+        err.contains("bodies.csv:3: malformed row: 23 fields, the header has 22"),
+        "{err}"
+    );
+
     // A missing column in contacts.csv.
     let d = run_dir("no-gap", 2);
     std::fs::write(d.join("contacts.csv"), "t,body_a,body_b\n0,a,b\n").unwrap();
@@ -566,4 +582,82 @@ fn a_blank_unit_name_is_a_scene_error_naming_the_field() {
     assert_eq!(e.field.as_deref(), Some("output.units.length"), "{e}");
     let text = SCENE_2D.replace(r#"length: "cm""#, r#"lenght: "cm""#);
     assert!(tumble::scene::Scene::parse(&text, "units.ron", "units").is_err());
+}
+
+/// A body named with a comma, a double quote and a non-ASCII letter runs through `tumble run`,
+/// its name is quoted in `bodies.csv` and `contacts.csv` (the numbers are not) and read back
+/// whole by a CSV reader, and `tumble plot` draws it: the bodies' and the contact gap's plots,
+/// the gap labelled with both names.
+#[test]
+fn a_body_named_with_a_comma_a_quote_and_an_accent_runs_and_is_plotted() {
+    let d = tmp("odd-name");
+    let (floor, ball) = ("floor", r#"ball,"red" é"#);
+    let scene = r#"Scene(
+    name: "odd-name",
+    domain: (origin: [0.0, -0.0625], extent: [0.5, 0.5], h: 0.015625),
+    fluid: (gravity: [0.0, -1.0]),
+    vacuum: true,
+    numerics: (dt: Fixed(0.004), end_time: 0.04),
+    bodies: [
+        (name: "floor", shape: HalfSpace(normal: [0.0, 1.0, 0.0], offset: 0.0),
+         kind: Static, position: [0.25, 0.0]),
+        (name: "ball,\"red\" é", shape: Disk(radius: 0.1), position: [0.25, 0.11]),
+    ],
+    output: (every: 0.04, fields: []),
+)"#;
+    std::fs::write(d.join("odd-name.ron"), scene).unwrap();
+    let run = d.join("run");
+    let out = Command::new(env!("CARGO_BIN_EXE_tumble"))
+        .arg("run")
+        .arg(d.join("odd-name.ron"))
+        .arg("--out")
+        .arg(&run)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let plots = [
+        "bodies_height.png",
+        "bodies_velocity.png",
+        "contacts_gap.png",
+    ];
+    for f in plots {
+        std::fs::remove_file(run.join(f)).unwrap();
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_tumble"))
+        .arg("plot")
+        .arg(&run)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in plots {
+        assert_png_900x600(&run.join(f));
+    }
+
+    let text = std::fs::read_to_string(run.join("bodies.csv")).unwrap();
+    assert!(text.contains(r#",1,"ball,""red"" é",0.25,"#), "{text}");
+    let mut r = csv::Reader::from_path(run.join("bodies.csv")).unwrap();
+    assert_eq!(r.headers().unwrap().len(), 22);
+    let rows: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
+    assert_eq!(rows.len(), 11, "t = 0 and 10 steps");
+    for row in &rows {
+        assert_eq!(row.len(), 22, "{row:?}");
+        assert_eq!(&row[2], ball);
+    }
+    let mut r = csv::Reader::from_path(run.join("contacts.csv")).unwrap();
+    let rows: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
+    assert!(!rows.is_empty(), "the ball starts 0.01 above the floor");
+    for row in &rows {
+        assert_eq!((&row[1], &row[2]), (floor, ball));
+    }
+    let gap = gap_series(&run).unwrap();
+    assert_eq!(gap[0].label, format!("{floor}\u{2013}{ball}"));
 }
