@@ -76,10 +76,9 @@
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::params::BodyCoupling;
-use crate::bodies::free_surface::FreeSurface;
-use crate::bodies::{Body, BodyFields, GridPatch, Material, RigidState};
+use crate::bodies::{Body, BodyFields, GridPatch, RigidState};
 use crate::solvers::Spectral;
-use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson, wants_multigrid};
+use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson};
 use crate::systems::rigid_velocity::{BodySums, integrate_n, penalized_weight};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
@@ -397,17 +396,7 @@ impl crate::schedule::Plugin for PressurePlugin {
         if mode.fluid() && mode.has_bodies() && coupling == BodyCoupling::Pressure {
             ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
             let grid = ctx.world.resource::<Grid>().clone();
-            // The multigrid hierarchy only where the densities can differ by its contrast.
-            let mut densities = vec![ctx.world.resource::<Params>().rho_fluid];
-            for fs in ctx.world.query::<&FreeSurface>().iter(ctx.world) {
-                densities.extend([fs.liquid_density, fs.gas_density]);
-            }
-            for (body, mat) in ctx.world.query::<(&Body, &Material)>().iter(ctx.world) {
-                if !body.is_static() {
-                    densities.push(mat.density);
-                }
-            }
-            let multigrid = wants_multigrid(&grid, densities);
+            let multigrid = ctx.world.resource::<Params>().multigrid;
             ctx.insert_resource(PressureSolver::new(&grid, multigrid));
             // One slot per body id (the bodies are spawned before the plugins are built), so
             // the step does not allocate.

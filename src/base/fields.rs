@@ -126,6 +126,10 @@ pub struct Params {
     pub has_bodies: bool,
     /// Whether the scene has a free surface.
     pub free_surface: bool,
+    /// Whether the pressure solve keeps a multigrid hierarchy: the densities of the run (the
+    /// fluid's, a free surface's gas, the moving bodies') can differ by its contrast and the
+    /// grid coarsens fully.
+    pub multigrid: bool,
 }
 
 /// The penalization mask of a body from its χ and φ at a node: χ itself when the offset is
