@@ -345,7 +345,7 @@ pub fn pressure(
     crate::systems::penalization::curl_add(&grid, &bf.du, fields.omega_mut());
     // The momentum of each dynamic body's excess mass, taken over the region its
     // penalization moved this step: the body carries it to the next step's rigid velocity.
-    let ldt = params.lambda * dt;
+    let ldt = params.numerics.lambda * dt;
     for (body, patch, st) in &bodies {
         if !body.is_dynamic() {
             continue;
@@ -392,7 +392,7 @@ impl crate::schedule::Plugin for PressurePlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         let mode = ctx.mode();
-        let coupling = ctx.world.resource::<Params>().body_coupling;
+        let coupling = ctx.world.resource::<Params>().numerics.body_coupling;
         if mode.fluid() && mode.has_bodies() && coupling == BodyCoupling::Pressure {
             ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
             let grid = ctx.world.resource::<Grid>().clone();
