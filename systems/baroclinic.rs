@@ -37,8 +37,8 @@ pub fn baroclinic(
     bodies: Query<(&Body, &RigidState, &PreviousVelocity, &Material)>,
 ) {
     let dt = time.dt;
-    let rigid = params.interface_acceleration == InterfaceAcceleration::Rigid;
-    let momentum = params.body_coupling == BodyCoupling::Momentum;
+    let rigid = params.numerics.interface_acceleration == InterfaceAcceleration::Rigid;
+    let momentum = params.numerics.body_coupling == BodyCoupling::Momentum;
     let inv_dt_body = if fields.dt_prev > 0.0 {
         1.0 / fields.dt_prev
     } else {
@@ -74,7 +74,7 @@ pub fn baroclinic(
     let inv2h = 0.5 / grid.h;
     let rho = &bf.rho;
     let rho_f = params.rho_fluid;
-    let boussinesq = params.boussinesq;
+    let boussinesq = params.numerics.boussinesq;
     let nb = crate::base::grid::periodic_neighbours;
     let u = std::mem::take(&mut fields.u);
     let u_prev = std::mem::take(&mut fields.u_prev);
@@ -152,7 +152,7 @@ impl crate::schedule::Plugin for BaroclinicPlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         let mode = ctx.mode();
-        let coupling = ctx.world.resource::<Params>().body_coupling;
+        let coupling = ctx.world.resource::<Params>().numerics.body_coupling;
         if mode.fluid() && mode.has_bodies() && coupling != BodyCoupling::Pressure {
             ctx.add_system(PhysicsSet::Baroclinic, "baroclinic", baroclinic)?;
         }

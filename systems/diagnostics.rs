@@ -281,8 +281,8 @@ pub fn next_dt(
     stop_at: Option<f64>,
 ) -> f64 {
     let bounds = StepBounds::new(params, h, motion);
-    let dt = allowed_dt(&params.dt_policy, sample, h, fallback, bounds);
-    if params.dt_policy.lands_on_outputs() {
+    let dt = allowed_dt(&params.numerics.dt, sample, h, fallback, bounds);
+    if params.numerics.dt.lands_on_outputs() {
         land_on(t, dt, stop_at)
     } else {
         dt
@@ -432,7 +432,7 @@ fn rest_speed_limit(grid: &Grid, params: &Params, omega0: f64) -> Option<f64> {
         .take(grid.dim)
         .fold(0.0f64, |a, &b| a.max(b));
     (omega0 == 0.0 && g > 0.0 && l > 0.0)
-        .then(|| params.blowup_factor.sqrt() * (2.0 * g * l).sqrt())
+        .then(|| params.numerics.blowup_factor.sqrt() * (2.0 * g * l).sqrt())
 }
 
 /// The diagnostics system: closes the step.
@@ -473,16 +473,16 @@ pub fn diagnostics(
             s.max_omega,
             place(&grid, at.omega_at, &bodies),
         ));
-    } else if diag.omega0 > 0.0 && s.max_omega > params.blowup_factor * diag.omega0 {
+    } else if diag.omega0 > 0.0 && s.max_omega > params.numerics.blowup_factor * diag.omega0 {
         failure.reason = Some(format!(
             "blow-up: max|ω| = {:.4e} at {} after step {step} (t = {:.6}) exceeds {} times its initial value {:.4e}; reduce the time step (numerics.dt) or refine the grid",
             s.max_omega,
             place(&grid, at.omega_at, &bodies),
             time.t,
-            params.blowup_factor,
+            params.numerics.blowup_factor,
             diag.omega0
         ));
-    } else if let TimeStep::Fixed(dt) = params.dt_policy
+    } else if let TimeStep::Fixed(dt) = params.numerics.dt
         && s.max_u * dt / grid.h > 20.0
     {
         failure.reason = Some(format!(

@@ -335,7 +335,7 @@ pub fn phase_density(
     let Some(fs) = surfaces.iter().next() else {
         return;
     };
-    let eps = params.interface_cells * grid.h;
+    let eps = params.numerics.interface_cells * grid.h;
     write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
     // Inside a moving body, the phase it displaces at its pose now: φ_w continued from outside
     // (see the module doc).
@@ -395,7 +395,7 @@ pub fn free_surface(
             std::slice::from_mut(&mut ls.phi),
             &u[axis],
             0.0,
-            params.remesh_kernel,
+            params.numerics.experimental.remesh_kernel,
             &scratch.pool,
         );
     }
@@ -410,7 +410,7 @@ pub fn free_surface(
         write_inside(&grid, patch, &mut ls.phi, |n| next[n]);
     }
     redistance(&grid, ls, scratch, STEP_ITERATIONS);
-    let eps = params.interface_cells * grid.h;
+    let eps = params.numerics.interface_cells * grid.h;
     restore_volume(&grid, ls, scratch, eps);
 }
 
@@ -594,7 +594,7 @@ pub fn free_surface_init(
     bodies: Query<(&Body, &GridPatch)>,
 ) {
     let ls = &mut *ls;
-    let eps = params.interface_cells * grid.h;
+    let eps = params.numerics.interface_cells * grid.h;
     // The walls: the static bodies' union level set (sampled by `level_sets_init`).
     let mut phi_s: Option<Vec<f64>> = None;
     for (body, patch) in &bodies {

@@ -22,7 +22,7 @@ pub fn level_sets(
     mut bodies: Query<(&Body, &RigidState, &BodyShape, &mut GridPatch)>,
     mut failure: ResMut<Failure>,
 ) {
-    let eps = params.interface_cells * grid.h;
+    let eps = params.numerics.interface_cells * grid.h;
     for (body, state, shape, mut patch) in &mut bodies {
         if body.is_static() && patch.sampled {
             continue;
@@ -69,7 +69,7 @@ pub fn level_sets_init(
     params: Res<Params>,
     mut bodies: Query<(&RigidState, &BodyShape, &mut GridPatch)>,
 ) {
-    let eps = params.interface_cells * grid.h;
+    let eps = params.numerics.interface_cells * grid.h;
     for (state, shape, mut patch) in &mut bodies {
         sample(&grid, state, shape, &mut patch, eps);
         patch.sampled = false;

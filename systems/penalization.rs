@@ -49,7 +49,7 @@ pub fn penalization(
     mut bodies: Query<(&Body, &GridPatch, &RigidState, &mut Hydro)>,
 ) {
     let dt = time.dt;
-    let ldt = params.lambda * dt;
+    let ldt = params.numerics.lambda * dt;
     let dim = grid.dim;
     let bf = &mut *bf;
     for c in bf.du.iter_mut() {
@@ -64,8 +64,8 @@ pub fn penalization(
         dt
     };
     let mask = params.penalization_mask(grid.h);
-    let momentum = params.body_coupling == BodyCoupling::Momentum;
-    let pressure = params.body_coupling == BodyCoupling::Pressure;
+    let momentum = params.numerics.body_coupling == BodyCoupling::Momentum;
+    let pressure = params.numerics.body_coupling == BodyCoupling::Pressure;
     let fields = &mut *fields;
     // Moving bodies first, static ones last: where a body overlaps a wall, the wall wins and
     // the fluid there is at rest, which is what stops a body at a wall.

@@ -77,12 +77,11 @@ use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::params::BodyCoupling;
 use crate::bodies::coupling::{ExcessMomentum, PressureState};
-use crate::bodies::free_surface::FreeSurface;
 use crate::bodies::integrals::{BodySums, integrate_n, penalized_weight};
-use crate::bodies::{Body, BodyFields, GridPatch, Material, RigidState};
+use crate::bodies::{Body, BodyFields, GridPatch, RigidState};
 use crate::solvers::Spectral;
 use crate::solvers::operators::curl_add;
-use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson, wants_multigrid};
+use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -320,7 +319,7 @@ pub fn pressure(
     curl_add(&grid, &bf.du, fields.omega_mut());
     // The momentum of each dynamic body's excess mass, taken over the region its
     // penalization moved this step: the body carries it to the next step's rigid velocity.
-    let ldt = params.lambda * dt;
+    let ldt = params.numerics.lambda * dt;
     for (body, patch, st) in &bodies {
         if !body.is_dynamic() {
             continue;
@@ -367,22 +366,12 @@ impl crate::schedule::Plugin for PressurePlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         let mode = ctx.mode();
-        let coupling = ctx.world.resource::<Params>().body_coupling;
+        let coupling = ctx.world.resource::<Params>().numerics.body_coupling;
         if mode.fluid() && mode.has_bodies() && coupling == BodyCoupling::Pressure {
             ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
             ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
             let grid = ctx.world.resource::<Grid>().clone();
-            // The multigrid hierarchy only where the densities can differ by its contrast.
-            let mut densities = vec![ctx.world.resource::<Params>().rho_fluid];
-            for fs in ctx.world.query::<&FreeSurface>().iter(ctx.world) {
-                densities.extend([fs.liquid_density, fs.gas_density]);
-            }
-            for (body, mat) in ctx.world.query::<(&Body, &Material)>().iter(ctx.world) {
-                if !body.is_static() {
-                    densities.push(mat.density);
-                }
-            }
-            let multigrid = wants_multigrid(&grid, densities);
+            let multigrid = ctx.world.resource::<Params>().multigrid;
             ctx.insert_resource(PressureSolver::new(&grid, multigrid));
             // One slot per body id (the bodies are spawned before the plugins are built), so
             // the step does not allocate.

@@ -53,8 +53,8 @@ pub fn rigid_velocity(
     mut bodies: Query<(&Body, &GridPatch, &Material, &mut RigidState, &mut Hydro)>,
     pressure_state: Option<Res<PressureState>>,
 ) {
-    let momentum = params.body_coupling == BodyCoupling::Momentum;
-    let pressure = params.body_coupling == BodyCoupling::Pressure;
+    let momentum = params.numerics.body_coupling == BodyCoupling::Momentum;
+    let pressure = params.numerics.body_coupling == BodyCoupling::Pressure;
     let rho = &bf.rho;
     let phase = &bf.rho_phase;
     // Under the pressure projection the body's mass beyond the fluid's, (ρ - ρ_P), keeps the
@@ -83,7 +83,7 @@ pub fn rigid_velocity(
         // flow. (With the χ-weighted mean, the outer half of the interface band, where χ is
         // small but λΔtχ ≫ 1, is dragged along at ū every step: momentum from nothing that
         // made a settling sphere fall ~50% too fast.)
-        let ldt = params.lambda * time.dt;
+        let ldt = params.numerics.lambda * time.dt;
         let weight = |c: f64| penalized_weight(ldt, c);
         let parts = excess.and_then(|x| x.get(body.id).copied().flatten());
         // All of the body's integrals in one pass over its patch:

@@ -81,9 +81,9 @@ pub fn transport(
     let dt = time.dt;
     let fields = &mut *fields;
     let max_omega = crate::solvers::max_norm(fields.omega());
-    let cutoff = params.remesh_cutoff * max_omega;
+    let cutoff = params.numerics.remesh_cutoff * max_omega;
     let scratch = &mut *scratch;
-    let a = if params.midpoint_velocity && fields.dt_prev > 0.0 {
+    let a = if params.numerics.experimental.midpoint_velocity && fields.dt_prev > 0.0 {
         0.5 * dt / fields.dt_prev
     } else {
         0.0
@@ -120,7 +120,7 @@ pub fn transport(
             omega,
             &u[axis],
             cutoff,
-            params.remesh_kernel,
+            params.numerics.experimental.remesh_kernel,
             &scratch.pool,
         );
     }

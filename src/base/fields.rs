@@ -4,7 +4,7 @@
 //! [`Grid::idx`]. In 2D the vorticity is a scalar (one component) and the velocity has two.
 
 use crate::base::grid::Grid;
-use crate::base::params::{BodyCoupling, InterfaceAcceleration, RemeshKernel, TimeStep};
+use crate::base::params::Numerics;
 use bevy_ecs::prelude::Resource;
 
 /// Vorticity (a new version), velocity and previous velocity, as [`Fields::transport_parts`]
@@ -100,32 +100,17 @@ pub struct Params {
     pub gravity: [f64; 3],
     /// Uniform background velocity (k = 0 mode).
     pub background: [f64; 3],
-    /// Time-step policy.
-    pub dt_policy: TimeStep,
-    /// Particle creation cutoff relative to max|ω|.
-    pub remesh_cutoff: f64,
-    /// Blow-up threshold as a multiple of the initial max|ω|.
-    pub blowup_factor: f64,
-    /// Carry particles with the mid-step velocity extrapolated from the last two.
-    pub midpoint_velocity: bool,
-    /// Interpolation and remeshing kernel.
-    pub remesh_kernel: RemeshKernel,
-    /// Penalization coefficient λ.
-    pub lambda: f64,
-    /// Half-width of the smoothed Heaviside, in cells.
-    pub interface_cells: f64,
-    /// Offset of the penalization mask into the body, in cells.
-    pub penalization_offset: f64,
-    /// How gravity and a dynamic body's inertia reach the body.
-    pub body_coupling: BodyCoupling,
-    /// Boussinesq form of the baroclinic term.
-    pub boussinesq: bool,
-    /// Du/Dt on the interfaces in the baroclinic term.
-    pub interface_acceleration: InterfaceAcceleration,
+    /// The scene's `numerics` section: the time-step policy, the particles' cutoff and
+    /// kernel, the penalization and the body coupling.
+    pub numerics: Numerics,
     /// Whether the scene has bodies.
     pub has_bodies: bool,
     /// Whether the scene has a free surface.
     pub free_surface: bool,
+    /// Whether the pressure solve keeps a multigrid hierarchy: the densities of the run (the
+    /// fluid's, a free surface's gas, the moving bodies') can differ by its contrast and the
+    /// grid coarsens fully.
+    pub multigrid: bool,
 }
 
 /// The penalization mask of a body from its χ and φ at a node: χ itself when the offset is
@@ -154,8 +139,8 @@ impl Params {
     /// The penalization mask on a grid of spacing `h`.
     pub fn penalization_mask(&self, h: f64) -> PenalizationMask {
         PenalizationMask {
-            offset: self.penalization_offset * h,
-            eps: self.interface_cells * h,
+            offset: self.numerics.penalization_offset * h,
+            eps: self.numerics.interface_cells * h,
         }
     }
 

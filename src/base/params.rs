@@ -1,6 +1,7 @@
-//! Typed numerical parameters shared by the systems and the scene format: the time-step
-//! policy, the body coupling, the remeshing kernel. The scene file deserializes into these
-//! types; the systems read them from [`crate::base::fields::Params`].
+//! Typed numerical parameters shared by the systems and the scene format: the scene's
+//! `numerics` section ([`Numerics`]) with its time-step policy, body coupling and remeshing
+//! kernel. The scene file deserializes into these types; the systems read them from
+//! [`crate::base::fields::Params`], which holds the scene's `Numerics` as they are.
 
 use serde::{Deserialize, Serialize};
 
@@ -139,4 +140,108 @@ pub enum RemeshKernel {
     /// Λ4,2 (Cottet et al. 2014): 6 nodes per axis, fourth order, C², conserves moments up to
     /// the third; more accurate for under-resolved small scales.
     Lambda42,
+}
+
+/// Time stepping and particle parameters.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Numerics {
+    /// Time step policy. Default: `Adaptive(c: 0.5)`.
+    pub dt: TimeStep,
+    /// Simulated time at which the run ends, time units, > 0. An adaptive run lands on it
+    /// exactly (the last step shortened, the last two halved when less than two steps
+    /// remain); a `Fixed` run ends at the first step at or after it. Default: 1.
+    pub end_time: f64,
+    /// Particle creation cutoff, relative to max|ω| (dimensionless, in [0, 1)): grid nodes with
+    /// |ω| at or below `remesh_cutoff * max|ω|` create no particle and keep their (small)
+    /// vorticity in place. Default: 1e-8.
+    pub remesh_cutoff: f64,
+    /// Stop the run as blown up when max|ω| exceeds this multiple of its initial value
+    /// (dimensionless); for a flow that starts at rest under gravity (no initial vorticity),
+    /// when max|u| exceeds its square root times the free-fall speed across the box,
+    /// √(2 |g| L) with L the box's longest side. Default: 1e4.
+    pub blowup_factor: f64,
+    /// Penalization coefficient λ, 1/time, > 0 (implicit, so any value is stable). Default: 1e6.
+    pub lambda: f64,
+    /// Half-width of the smoothed Heaviside χ = H(φ), in cells (> 0). Default: 1.
+    pub interface_cells: f64,
+    /// Where the penalization mask of static and kinematic bodies (walls, obstacles) sits
+    /// relative to their surface, in cells: the mask is H_ε(φ - offset h), so with an offset
+    /// of one half-width the smoothed band lies inside the body and the rigid region does not
+    /// reach into the fluid (a fixed cylinder's drag then converges from the first grid).
+    /// Dynamic bodies always use the centred χ = H_ε(φ). In [0, 2 interface_cells].
+    /// Default: 0.
+    pub penalization_offset: f64,
+    /// How gravity and a dynamic body's own inertia reach the body. `Pressure` (the
+    /// default, and the model for every density): the variable-density projection of
+    /// `systems/pressure.rs` gives buoyancy, pressure forces and added mass at any density
+    /// ratio, and the body's rigid velocity is the density-weighted mean of the flow over it.
+    /// `Baroclinic` (research, the paper's): gravity makes vorticity on the body's interface
+    /// (eq. 28, in the form `boussinesq` and `interface_acceleration` choose) and ū is the
+    /// flow's mean over the body; wrong for bodies denser than about 2.5 ρ_F. `Momentum`
+    /// (research): the body's buoyancy and excess inertia act on its rigid velocity directly.
+    /// Measurements of all three in [`BodyCoupling`]. Default: Pressure.
+    pub body_coupling: BodyCoupling,
+    /// Use the Boussinesq form of the baroclinic term, ∇ρ × g / ρ_F (eq. 18), instead of the
+    /// full form (eq. 28); only with `body_coupling: Baroclinic`. Default: false.
+    pub boussinesq: bool,
+    /// The fluid acceleration Du/Dt on the bodies' interfaces in the baroclinic term (eq. 28):
+    /// `Rigid`, the acceleration of the body's rigid motion (no slip), or `Eulerian`, the grid
+    /// estimate ∂u/∂t + (u·∇)u from the last two velocity fields (the paper's); only with
+    /// `body_coupling: Baroclinic`. Default: Rigid.
+    pub interface_acceleration: InterfaceAcceleration,
+    /// Unsupported numerical variants kept for experiments: no bundled scene, validation case
+    /// or test uses a non-default value, and they may be removed without notice. Written as
+    /// `numerics: (experimental: (midpoint_velocity: false))`. Default: every entry at its
+    /// default.
+    #[serde(skip_serializing_if = "Experimental::is_default")]
+    pub experimental: Experimental,
+}
+
+/// Unsupported numerical variants (`numerics.experimental`): may be removed; the defaults are
+/// what tumble is validated with.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct Experimental {
+    /// Carry the particles (and stretch the vorticity) with the mid-step velocity
+    /// u^{n+1/2} = u^n + (Δt_n / 2Δt_{n-1}) (u^n - u^{n-1}) instead of the frozen u^n, which makes
+    /// the step second order in time; `false` gives a first-order step. Default: true.
+    pub midpoint_velocity: bool,
+    /// Interpolation and remeshing kernel: `M4Prime` (the paper's eq. 30) or `Lambda42`
+    /// (fourth order, 6 points per axis). Default: `M4Prime`.
+    pub remesh_kernel: RemeshKernel,
+}
+
+impl Default for Experimental {
+    fn default() -> Self {
+        Experimental {
+            midpoint_velocity: true,
+            remesh_kernel: RemeshKernel::M4Prime,
+        }
+    }
+}
+
+impl Experimental {
+    /// Whether every entry has its default (then it is not written back to RON).
+    pub fn is_default(&self) -> bool {
+        *self == Experimental::default()
+    }
+}
+
+impl Default for Numerics {
+    fn default() -> Self {
+        Numerics {
+            dt: TimeStep::default(),
+            end_time: 1.0,
+            remesh_cutoff: 1e-8,
+            blowup_factor: 1e4,
+            lambda: 1e6,
+            interface_cells: 1.0,
+            penalization_offset: 0.0,
+            body_coupling: BodyCoupling::default(),
+            boussinesq: false,
+            interface_acceleration: InterfaceAcceleration::Rigid,
+            experimental: Experimental::default(),
+        }
+    }
 }

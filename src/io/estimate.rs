@@ -92,17 +92,7 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
         // The multigrid hierarchy where the densities can differ by its contrast: four weights
         // per node on every level, and each coarse level's right-hand side and correction
         // (a level has 2^-dim of the nodes of the one above it).
-        let fluid = scene.fluid.density;
-        let mut densities = vec![fluid];
-        if let Some(fs) = &scene.free_surface {
-            densities.push(fs.gas_density);
-        }
-        for b in &scene.bodies {
-            if b.kind != crate::bodies::BodyKind::Static {
-                densities.push(b.density.unwrap_or(fluid));
-            }
-        }
-        if crate::solvers::variable_poisson::wants_multigrid(&g, densities) {
+        if scene.resolved().params.multigrid {
             let levels = 2f64.powf(d) / (2f64.powf(d) - 1.0);
             per_node += 4.0 * levels + 2.0 * (levels - 1.0);
         }

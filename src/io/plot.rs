@@ -409,25 +409,22 @@ impl RunInfo {
                 return None;
             }
         };
-        let h = scene.grid().h;
-        let fluid_density = scene.fluid.density;
+        let resolved = scene.resolved();
         let bodies = scene
             .bodies
             .iter()
             .zip(scene.geometries())
-            .map(|(b, g)| {
-                let rho = b.density.unwrap_or(fluid_density);
-                BodyInfo {
-                    name: b.name.clone(),
-                    mass: g.volume().map(|v| rho * v),
-                    inertia: g.inertia_unit_density().map(|j| rho * j),
-                }
+            .zip(&resolved.densities)
+            .map(|((b, g), &rho)| BodyInfo {
+                name: b.name.clone(),
+                mass: g.volume().map(|v| rho * v),
+                inertia: g.inertia_unit_density().map(|j| rho * j),
             })
             .collect();
         Some(RunInfo {
             name: scene.name.clone(),
             units: scene.output.units.clone(),
-            eps: Some(scene.contact.eps.unwrap_or(h)),
+            eps: Some(resolved.contact.eps),
             vacuum: scene.vacuum,
             gravity: scene.gravity(),
             bodies,

@@ -91,9 +91,9 @@ fn sig4(x: f64) -> String {
 /// scene's `contact.kappa`, the bodies' and pairs' own values, the scaled default
 /// C L² max(|g|, U²/ε)).
 pub fn kappa_in_use(scene: &ValidScene) -> String {
-    let cp = crate::sim::build::contact_params(scene, scene.grid().h);
+    let cp = &scene.resolved().contact;
     let c = &scene.contact;
-    let own: Vec<Option<f64>> = scene.bodies.iter().map(|b| b.kappa.or(c.kappa)).collect();
+    let own = &scene.resolved().kappas;
     let dynamic = |i: usize| matches!(scene.bodies[i].kind, BodyKind::Dynamic);
     // Bodies alike for κ (kind, own value, length) give one value per pair of groups.
     let mut groups: BTreeMap<(bool, Option<u64>, u64), (usize, usize)> = BTreeMap::new();
@@ -279,24 +279,25 @@ pub fn describe(scene: &ValidScene) -> String {
     }
     // Bodies counted by shape and by density, then grouped by kind, shape and density (a
     // density range when there are too many values to list).
-    let density_of = |b: &crate::scene::BodySpec| match b.kind {
-        BodyKind::Dynamic => Some(b.density.unwrap_or(f.density)),
+    let resolved = &scene.resolved().densities;
+    let density_of = |i: usize| match scene.bodies[i].kind {
+        BodyKind::Dynamic => Some(resolved[i]),
         _ => None,
     };
     let mut densities: BTreeMap<u64, usize> = BTreeMap::new();
-    for d in scene.bodies.iter().filter_map(density_of) {
+    for d in (0..scene.bodies.len()).filter_map(density_of) {
         *densities.entry(d.to_bits()).or_default() += 1;
     }
     let many = densities.len() > MAX_LISTED_DENSITIES;
     // (kind, shape, density when listed) -> (count, least and greatest density).
     let mut groups: BTreeMap<(&str, &str, String), (usize, f64, f64)> = BTreeMap::new();
-    for b in &scene.bodies {
+    for (i, b) in scene.bodies.iter().enumerate() {
         let kind = match &b.kind {
             BodyKind::Dynamic => "dynamic",
             BodyKind::Static => "static",
             BodyKind::Kinematic { .. } => "kinematic",
         };
-        let d = density_of(b);
+        let d = density_of(i);
         let label = match (d, b.density) {
             (Some(d), Some(_)) if !many => format!("density {d}"),
             (Some(d), None) if !many => format!("density {d} (the fluid's)"),
@@ -360,7 +361,11 @@ pub fn describe(scene: &ValidScene) -> String {
             let _ = writeln!(s, "    {n} {kind} {shape}{sep}{density}");
         }
         let c = &scene.contact;
-        let eps = c.eps.map_or(format!("h = {}", g.h), |e| e.to_string());
+        let eps = scene.resolved().contact.eps;
+        let eps = match c.eps {
+            Some(_) => eps.to_string(),
+            None => format!("h = {eps}"),
+        };
         let _ = writeln!(
             s,
             "  contact: kappa {}, range eps = {eps}, cut off at {} eps",

@@ -1,14 +1,15 @@
 //! The checks of a scene, one per type: each returns the first problem as an `Issue` with
 //! the field's path relative to the checked value, and the caller puts it under its own key.
-//! `check_scene` runs them all, then builds the bodies' shapes (reading mesh files) and
-//! looks for bodies overlapping at the start; it is the only way to a
-//! [`ValidScene`](crate::scene::ValidScene).
+//! `check_scene` runs them all, then builds the bodies' shapes (reading mesh files), looks for
+//! bodies overlapping at the start and resolves the defaults ([`super::resolved`]); it is the
+//! only way to a [`ValidScene`](crate::scene::ValidScene).
 
 use super::error::{Check, Issue, Seg, fail};
 use super::format::{
     BodySpec, Contact, Domain, Fluid, InitialVorticity, Numerics, Output, OutputFormat, Scene,
 };
 use super::generate::Span;
+use super::resolved::Resolved;
 use crate::base::grid::Grid;
 use crate::base::params::{BodyCoupling, InterfaceAcceleration, TimeStep};
 use crate::bodies::BodyKind;
@@ -17,9 +18,12 @@ use crate::bodies::shapes::{Shape, ShapeGeometry};
 /// The most grid nodes a scene may ask for (2^32; about 35 GB per scalar field).
 pub const MAX_NODES: u64 = 1 << 32;
 
+/// The outcome of the checks: the scene's grid, its bodies' shapes and its resolved defaults.
+pub(crate) type Checked = (Grid, Vec<ShapeGeometry>, Resolved);
+
 /// Check every value of `scene` (filling in defaults: body names, normalised axes), build its
-/// shapes and check for initial overlaps; on success, the scene's grid and its bodies' shapes.
-pub(crate) fn check_scene(scene: &mut Scene) -> Check<(Grid, Vec<ShapeGeometry>)> {
+/// shapes, check for initial overlaps and resolve its defaults.
+pub(crate) fn check_scene(scene: &mut Scene) -> Check<Checked> {
     check_name(&scene.name).map_err(|i| i.under(Seg::Key("name")))?;
     let grid = scene
         .domain
@@ -88,7 +92,7 @@ fn check_bodies_and_rest(
     listed: usize,
     lo: &[f64],
     hi: &[f64],
-) -> Check<(Grid, Vec<ShapeGeometry>)> {
+) -> Check<Checked> {
     let dim = grid.dim;
     for (i, b) in scene.bodies.iter().enumerate().skip(listed) {
         b.check(dim, lo, hi)
@@ -110,8 +114,9 @@ fn check_bodies_and_rest(
     let geoms = check_geometry(scene, grid)?;
     super::liquid::check_tank(scene, grid, &geoms)
         .map_err(|i| i.under(Seg::Key("free_surface")))?;
-    check_kappa_scale(scene, grid, &geoms).map_err(|i| i.under(Seg::Key("contact")))?;
-    Ok((grid.clone(), geoms))
+    let resolved = super::resolved::resolve(scene, grid, &geoms);
+    check_kappa_scale(scene, &resolved).map_err(|i| i.under(Seg::Key("contact")))?;
+    Ok((grid.clone(), geoms, resolved))
 }
 
 /// A scene's name names its run directory `runs/<name>`: one plain path component.
@@ -531,14 +536,14 @@ impl BodySpec {
 
 /// A scene that leaves κ to its default needs a scale for it: gravity, or bodies that move
 /// (see [`super::kappa`]).
-fn check_kappa_scale(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> Check {
+fn check_kappa_scale(scene: &Scene, resolved: &Resolved) -> Check {
     if scene.contact.kappa.is_some() {
         return Ok(());
     }
     let Some((a, b)) = scene.contact.pair_without_kappa(&scene.bodies) else {
         return Ok(());
     };
-    if super::kappa::kappa_default(scene, grid, geoms).acceleration() > 0.0 {
+    if resolved.contact.default.acceleration() > 0.0 {
         return Ok(());
     }
     fail(
@@ -748,7 +753,8 @@ impl Scene {
     /// cells per radius); under `Baroclinic`, bodies heavier than 2.5 ρ_F (its excess inertia
     /// is explicit: a sphere of density 3 in a periodic box settled 35% too fast, one of 4 blew
     /// up); and the baroclinic options set under another coupling, which ignores them.
-    pub fn warnings(&self) -> Vec<String> {
+    /// `densities` are the bodies' (resolved, see [`Resolved::densities`]).
+    pub(crate) fn warnings(&self, densities: &[f64]) -> Vec<String> {
         let mut out = Vec::new();
         let n = &self.numerics;
         if self.vacuum {
@@ -763,11 +769,11 @@ impl Scene {
                 n.body_coupling
             ));
         }
-        for b in &self.bodies {
+        for (b, density) in self.bodies.iter().zip(densities) {
             if !matches!(b.kind, BodyKind::Dynamic) {
                 continue;
             }
-            let ratio = b.density.unwrap_or(self.fluid.density) / self.fluid.density;
+            let ratio = density / self.fluid.density;
             if baroclinic && !n.boussinesq && ratio > 2.5 {
                 out.push(format!(
                     "body `{}` is {ratio:.3} times as dense as the fluid: with `body_coupling: Baroclinic` dense bodies move wrongly (a sphere settling at Re << 1: +13% at 2 times, +35% at 3, blown up at 4); the default coupling (`Pressure`) does not",

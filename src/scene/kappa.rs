@@ -10,7 +10,8 @@ use crate::bodies::shapes::ShapeGeometry;
 use crate::bodies::{BodyKind, angular3, vec3};
 use glam::DVec3;
 
-/// The default κ of `scene` on `grid` with its bodies' shapes `geoms`.
+/// The default κ of `scene` on `grid` with its bodies' shapes `geoms` and the contact range
+/// `eps` (resolved: `contact.eps`, else h).
 ///
 /// U bounds the speed at which a dynamic body meets another: its initial speed (|v| plus |ω|
 /// times its bounding radius), plus the fastest kinematic body's (|velocity| + |amplitude| +
@@ -20,10 +21,15 @@ use glam::DVec3;
 /// to the bottom of the domain, √(2 |g| H). With the flow on a falling body arrives at its
 /// settling speed, braked by the fluid it squeezes out, and gravity alone sets the scale (the
 /// paper's own values in fluid match C |g| L²).
-pub(crate) fn kappa_default(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> KappaDefault {
+pub(crate) fn kappa_default(
+    scene: &Scene,
+    grid: &Grid,
+    geoms: &[ShapeGeometry],
+    eps: f64,
+) -> KappaDefault {
     let dim = grid.dim;
     let g = DVec3::from_array(scene.gravity());
-    let lo = vec3(scene.domain.origin.as_deref().unwrap_or(&[]));
+    let lo = DVec3::from_array(grid.origin);
     let hi = lo + vec3(&scene.domain.extent);
     // The distance from `c` to the bottom of the domain along gravity.
     let fall = |c: DVec3| -> f64 {
@@ -105,7 +111,7 @@ pub(crate) fn kappa_default(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry])
         factor: default_kappa_factor(dim),
         gravity: g.length(),
         speed,
-        eps: scene.contact.eps.unwrap_or(grid.h),
+        eps,
         lengths: scene
             .bodies
             .iter()

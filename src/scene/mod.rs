@@ -17,8 +17,9 @@
 //!
 //! The files: [`format`] (the serde structs, every field documented), [`check`] (one check per
 //! type), [`error`] (errors and their locations), [`kappa`] (the default contact strength from
-//! the scene's scales), [`generate`] (body generators, expanded into bodies), [`overlap`] (bodies overlapping at the start) and [`valid`] (the
-//! [`ValidScene`] that only those checks make, the only scene the engine takes).
+//! the scene's scales), [`generate`] (body generators, expanded into bodies), [`overlap`] (bodies overlapping at the start), [`resolved`] (the
+//! defaults worked out from other settings, once) and [`valid`] (the [`ValidScene`] that only
+//! those checks make, the only scene the engine takes).
 
 pub mod check;
 pub mod error;
@@ -27,6 +28,7 @@ pub mod generate;
 pub mod kappa;
 mod liquid;
 pub mod overlap;
+pub mod resolved;
 pub mod valid;
 
 pub use crate::base::params::{BodyCoupling, InterfaceAcceleration, RemeshKernel, TimeStep};
@@ -34,4 +36,5 @@ pub use crate::bodies::BodyKind;
 pub use check::MAX_NODES;
 pub use error::SceneError;
 pub use format::*;
+pub use resolved::Resolved;
 pub use valid::ValidScene;

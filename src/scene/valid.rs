@@ -1,10 +1,12 @@
 //! [`ValidScene`]: a scene that passed every check. Reading a file ([`Scene::load`]), parsing
 //! text ([`Scene::parse`]) and changing a valid scene ([`ValidScene::edit`]) all end in the one
-//! check (`check_scene` in `check.rs`), and nothing else makes a `ValidScene`.
+//! check (`check_scene` in `check.rs`), and nothing else makes a `ValidScene`. It carries the
+//! scene's defaults resolved ([`Resolved`]), so nothing downstream works them out again.
 
 use super::check::check_scene;
 use super::error::{SceneError, offset_of, path_at};
 use super::format::Scene;
+use super::resolved::Resolved;
 use crate::base::grid::Grid;
 use crate::bodies::contact::KappaDefault;
 use crate::bodies::shapes::ShapeGeometry;
@@ -15,14 +17,15 @@ use std::path::Path;
 /// and pass (issue 17).
 pub const MAX_TESTED_RATIO: f64 = 100.0;
 
-/// A scene whose values, meshes and initial placement have been checked, with its grid and
-/// its bodies' shapes. Read it as a [`Scene`] (it dereferences to one); change it with
-/// [`ValidScene::edit`].
+/// A scene whose values, meshes and initial placement have been checked, with its grid, its
+/// bodies' shapes and its resolved defaults. Read it as a [`Scene`] (it dereferences to one);
+/// change it with [`ValidScene::edit`].
 #[derive(Debug, Clone)]
 pub struct ValidScene {
     scene: Scene,
     grid: Grid,
     geoms: Vec<ShapeGeometry>,
+    resolved: Resolved,
     file: String,
     /// The line of `free_surface.gas_density` in the text read, for the warnings.
     gas_line: Option<usize>,
@@ -48,17 +51,24 @@ impl ValidScene {
         &self.geoms
     }
 
-    /// The default κ of its pairs (used where neither `contact.kappa` nor the bodies give
-    /// one), see [`crate::scene::kappa`].
-    pub fn kappa_default(&self) -> KappaDefault {
-        super::kappa::kappa_default(&self.scene, &self.grid, &self.geoms)
+    /// Its defaults, resolved when it was checked: the bodies' densities, the contact model,
+    /// the engine's parameters (see [`Resolved`]).
+    pub fn resolved(&self) -> &Resolved {
+        &self.resolved
     }
 
-    /// [`Scene::warnings`], and a free surface whose density ratio is beyond
-    /// [`MAX_TESTED_RATIO`], the largest at which the free-surface gates were run and pass
-    /// (naming the scene's line).
+    /// The default κ of its pairs (used where neither `contact.kappa` nor the bodies give
+    /// one), see [`crate::scene::kappa`].
+    pub fn kappa_default(&self) -> &KappaDefault {
+        &self.resolved.contact.default
+    }
+
+    /// The warnings of its values (bodies much lighter or heavier than the fluid for their
+    /// coupling, baroclinic options that do not act; see `Scene::warnings` in `check.rs`), and
+    /// a free surface whose density ratio is beyond [`MAX_TESTED_RATIO`], the largest at which
+    /// the free-surface gates were run and pass (naming the scene's line).
     pub fn warnings(&self) -> Vec<String> {
-        let mut out = self.scene.warnings();
+        let mut out = self.scene.warnings(&self.resolved.densities);
         if let Some(fs) = &self.scene.free_surface {
             let ratio = self.scene.fluid.density / fs.gas_density;
             if ratio > MAX_TESTED_RATIO * (1.0 + 1e-9) {
@@ -115,7 +125,7 @@ impl ValidScene {
 
 /// The one path to a [`ValidScene`]: every check, errors located in `text` when given.
 fn validate(mut scene: Scene, file: &str, text: Option<&str>) -> Result<ValidScene, SceneError> {
-    let (grid, geoms) = check_scene(&mut scene).map_err(|i| i.into_error(file, text))?;
+    let (grid, geoms, resolved) = check_scene(&mut scene).map_err(|i| i.into_error(file, text))?;
     let gas_line = text.and_then(|t| {
         super::error::locate(
             t,
@@ -130,6 +140,7 @@ fn validate(mut scene: Scene, file: &str, text: Option<&str>) -> Result<ValidSce
         scene,
         grid,
         geoms,
+        resolved,
         file: file.to_string(),
         gas_line,
     })

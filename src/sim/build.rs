@@ -1,9 +1,8 @@
-//! From a validated scene to the world's typed resources and body entities: the one place
-//! where the scene format meets the engine's data.
+//! From a validated scene to the world's body entities and its free surface. The typed
+//! resources, `Params` and `ContactParams`, were made when the scene was checked, with its
+//! defaults ([`crate::scene::Resolved`]).
 
-use crate::base::fields::Params;
 use crate::base::grid::Grid;
-use crate::bodies::contact::ContactParams;
 use crate::bodies::levelset::LocalLevelSet;
 use crate::bodies::{
     Body, BodyKind, BodyShape, BodySurface, ContactPoints, ContactState, FreeMotion, GridPatch,
@@ -13,55 +12,10 @@ use crate::scene::ValidScene;
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 
-/// Parameters of a validated scene.
-pub fn params(scene: &ValidScene) -> Params {
-    Params {
-        nu: scene.fluid.viscosity,
-        rho_fluid: scene.fluid.density,
-        gravity: scene.gravity(),
-        background: scene.background_velocity(),
-        dt_policy: scene.numerics.dt.clone(),
-        remesh_cutoff: scene.numerics.remesh_cutoff,
-        blowup_factor: scene.numerics.blowup_factor,
-        midpoint_velocity: scene.numerics.experimental.midpoint_velocity,
-        remesh_kernel: scene.numerics.experimental.remesh_kernel,
-        lambda: scene.numerics.lambda,
-        interface_cells: scene.numerics.interface_cells,
-        penalization_offset: scene.numerics.penalization_offset,
-        body_coupling: scene.numerics.body_coupling,
-        boussinesq: scene.numerics.boussinesq,
-        interface_acceleration: scene.numerics.interface_acceleration,
-        has_bodies: !scene.bodies.is_empty(),
-        free_surface: scene.free_surface.is_some(),
-    }
-}
-
-/// The contact parameters of a validated scene on grid spacing `h`.
-pub fn contact_params(scene: &ValidScene, h: f64) -> ContactParams {
-    let id = |n: &str| scene.bodies.iter().position(|b| b.name == n);
-    let mut pairs: Vec<(usize, usize, f64)> = scene
-        .contact
-        .pairs
-        .iter()
-        .filter_map(|p| {
-            let (a, b) = (id(&p.bodies.0)?, id(&p.bodies.1)?);
-            Some((a.min(b), a.max(b), p.kappa))
-        })
-        .collect();
-    pairs.sort_by_key(|p| (p.0, p.1));
-    ContactParams {
-        eps: scene.contact.eps.unwrap_or(h),
-        range: scene.contact.range,
-        pairs,
-        predict: !scene.vacuum,
-        default: scene.kappa_default(),
-    }
-}
-
 /// Spawn the scene's bodies into `world` (their shapes were built when the scene was checked);
 /// returns how many.
 pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyhow::Result<usize> {
-    let rho_f = scene.fluid.density;
+    let resolved = scene.resolved();
     // A half-space is drawn as a square patch as wide as the domain's diagonal.
     let diagonal = {
         let e = grid.extent();
@@ -69,7 +23,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
     };
     for (id, (spec, geom)) in scene.bodies.iter().zip(scene.geometries()).enumerate() {
         let level_set = LocalLevelSet::new(geom.clone(), grid.h, band(grid), grid.dim);
-        let eps = scene.contact.eps.unwrap_or(grid.h);
+        let eps = resolved.contact.eps;
         // Quadrature lattice: half a cell in 2D; in 3D a whole cell (8 times fewer points, the
         // cost of dense piles; the points being material, the force stays conservative).
         let spacing = if grid.dim == 2 { 0.5 } else { 1.0 } * grid.h.min(eps);
@@ -80,7 +34,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             grid.dim,
             matches!(spec.kind, BodyKind::Dynamic),
         );
-        let density = spec.density.unwrap_or(rho_f);
+        let density = resolved.densities[id];
         let orientation = crate::bodies::rotation(&spec.rotation);
         let (velocity, angular_velocity) = match &spec.kind {
             BodyKind::Dynamic => (vec3(&spec.velocity), angular3(&spec.angular_velocity)),
@@ -127,7 +81,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             patch,
             Hydro::default(),
             ContactState {
-                kappa: spec.kappa.or(scene.contact.kappa),
+                kappa: resolved.kappas[id],
                 ..Default::default()
             },
             FreeMotion::default(),
@@ -158,7 +112,6 @@ pub fn spawn_free_surface(
     let dim = grid.dim;
     let up = dim - 1;
     let lo = grid.origin;
-    let ext = grid.extent();
     let shapes: Vec<Option<(crate::bodies::shapes::ShapeGeometry, DVec3)>> = spec
         .liquid
         .iter()
@@ -170,25 +123,21 @@ pub fn spawn_free_surface(
             _ => Ok(None),
         })
         .collect::<anyhow::Result<_>>()?;
-    let wave = |x: f64, amplitude: f64, wavelength: Option<f64>| {
-        let l = wavelength.unwrap_or(ext[0]);
+    let wave = |x: f64, amplitude: f64, l: f64| {
         amplitude * (2.0 * std::f64::consts::PI * (x - lo[0]) / l).cos()
     };
     let band = band(grid);
     let phi_at = |p: [f64; 3]| -> f64 {
         let mut best = f64::NEG_INFINITY;
-        for (r, s) in spec.liquid.iter().zip(&shapes) {
+        let regions = spec.liquid.iter().zip(&shapes);
+        for ((r, s), &l) in regions.zip(&scene.resolved().wavelengths) {
             let v = match r {
                 LiquidRegion::Below {
-                    height,
-                    amplitude,
-                    wavelength,
-                } => height + wave(p[0], *amplitude, *wavelength) - p[up],
+                    height, amplitude, ..
+                } => height + wave(p[0], *amplitude, l) - p[up],
                 LiquidRegion::Above {
-                    height,
-                    amplitude,
-                    wavelength,
-                } => p[up] - height - wave(p[0], *amplitude, *wavelength),
+                    height, amplitude, ..
+                } => p[up] - height - wave(p[0], *amplitude, l),
                 LiquidRegion::Shape { .. } => match s {
                     Some((g, c)) => g.phi(DVec3::from_array(p) - *c),
                     None => f64::NEG_INFINITY,

@@ -81,7 +81,7 @@ impl Simulation {
         for init in &scene.initial {
             add_initial(&grid, init, fields.omega_mut());
         }
-        world.insert_resource(crate::sim::build::params(&scene));
+        world.insert_resource(scene.resolved().params.clone());
         world.insert_resource(fields);
         world.insert_resource(SimTime {
             stop_at: Some(scene.numerics.end_time),
@@ -96,7 +96,7 @@ impl Simulation {
                 scene.fluid.density,
                 n_bodies,
             ));
-            world.insert_resource(crate::sim::build::contact_params(&scene, grid.h));
+            world.insert_resource(scene.resolved().contact.clone());
         }
         crate::sim::build::spawn_free_surface(&mut world, &scene, &grid)?;
         world.insert_resource(grid);

@@ -26,8 +26,7 @@ pub fn rebound_vacuum(quick: bool) -> anyhow::Result<Report> {
     let scene = bundled_scene("rebound-vacuum.ron")?;
     let r = 0.1;
     let y0 = scene.bodies[1].position[1];
-    let h = scene.grid().h;
-    let eps = scene.contact.eps.unwrap_or(h);
+    let eps = scene.resolved().contact.eps;
     let end = scene.numerics.end_time;
     let mut sim = Simulation::new(scene)?;
     let mut ys = vec![(sim.time(), y0)];

@@ -33,13 +33,12 @@ pub fn tank_pile(quick: bool) -> anyhow::Result<Report> {
         })?;
     }
     let g = DVec3::from_array(scene.gravity()).length();
-    let h = scene.grid().h;
-    let eps = scene.contact.eps.unwrap_or(h);
+    let eps = scene.resolved().contact.eps;
     let touch = scene.contact.range * eps;
     let nu = scene.fluid.viscosity;
     let rho_f = scene.fluid.density;
     let (lo, hi, r) = tank_geometry(&scene)?;
-    let rho_s = scene.bodies[1].density.unwrap_or(rho_f);
+    let rho_s = scene.resolved().densities[1];
     // Stokes settling velocity of one sphere in unbounded fluid.
     let u_stokes = 2.0 / 9.0 * (rho_s / rho_f - 1.0) * g * r * r / nu;
     let n = scene.bodies.len() - 1;

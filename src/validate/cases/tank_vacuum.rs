@@ -35,8 +35,7 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
         })?;
     }
     let g = DVec3::from_array(scene.gravity());
-    let h = scene.grid().h;
-    let eps = scene.contact.eps.unwrap_or(h);
+    let eps = scene.resolved().contact.eps;
     let (lo, hi, r) = tank_geometry(&scene)?;
     let n = scene.bodies.len() - 1;
     let end = scene.numerics.end_time;
