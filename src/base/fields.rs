@@ -181,7 +181,7 @@ impl Params {
 }
 
 /// Simulated time.
-#[derive(Resource, Debug, Clone, Default)]
+#[derive(Resource, Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct SimTime {
     /// Current time.
     pub t: f64,
@@ -194,7 +194,7 @@ pub struct SimTime {
 }
 
 /// Global diagnostics of the current state.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sample {
     /// Time.
     pub t: f64,
