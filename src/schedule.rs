@@ -11,7 +11,7 @@
 //! `examples/passive_scalar.rs`) whose [`Plugin::build`] inserts its resources, reading typed
 //! settings from [`Params`] and the world, adds its systems to a named set with
 //! [`PluginContext::add_system`], and registers the resources it keeps across a restart with
-//! [`PluginContext::checkpoint_resource`]. The built-in plugins are listed once, in
+//! [`PluginContext::checkpoint_resource`] (or [`PluginContext::checkpoint_part`]). The built-in plugins are listed once, in
 //! `systems::builtin`; adding a system is that file plus one line there (or one
 //! `add_plugin` call on the simulation builder). Every system added through a plugin is timed
 //! under its name into [`Timings`]: no system carries timing code.
@@ -373,7 +373,7 @@ struct StateEntry {
 }
 
 /// One saved record: name, version and the encoded bytes.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StateRecord {
     /// The record's name (unique in a simulation).
     pub name: String,
@@ -634,13 +634,7 @@ impl PluginContext<'_> {
     where
         R: Resource + Serialize + DeserializeOwned,
     {
-        if self.scheduler.state.iter().any(|e| e.name == name) {
-            anyhow::bail!(
-                "plugin `{}`: the checkpoint state `{name}` is already registered",
-                self.plugin
-            );
-        }
-        self.scheduler.state.push(StateEntry {
+        self.keep_state(StateEntry {
             name,
             version,
             save: |world| {
@@ -655,7 +649,59 @@ impl PluginContext<'_> {
                 world.insert_resource(r);
                 Ok(())
             },
-        });
+        })
+    }
+
+    /// Keep [`CheckpointPart::Part`] of resource `R` across a checkpoint, as
+    /// [`PluginContext::checkpoint_resource`] keeps a whole resource: for a resource that also
+    /// holds scratch or settings the plugin makes again. The part is put back into the
+    /// resource the plugin inserted.
+    pub fn checkpoint_part<R: CheckpointPart>(
+        &mut self,
+        name: &'static str,
+        version: u32,
+    ) -> anyhow::Result<()> {
+        self.keep_state(StateEntry {
+            name,
+            version,
+            save: |world| {
+                let r = world
+                    .get_resource::<R>()
+                    .ok_or_else(|| "the resource is missing".to_string())?;
+                postcard::to_stdvec(&r.save_part()).map_err(|e| e.to_string())
+            },
+            restore: |world, bytes| {
+                let part: R::Part =
+                    postcard::from_bytes(bytes).map_err(|e| format!("corrupt data ({e})"))?;
+                world
+                    .get_resource_mut::<R>()
+                    .ok_or_else(|| "the resource is missing".to_string())?
+                    .restore_part(part);
+                Ok(())
+            },
+        })
+    }
+
+    fn keep_state(&mut self, entry: StateEntry) -> anyhow::Result<()> {
+        if self.scheduler.state.iter().any(|e| e.name == entry.name) {
+            anyhow::bail!(
+                "plugin `{}`: the checkpoint state `{}` is already registered",
+                self.plugin,
+                entry.name
+            );
+        }
+        self.scheduler.state.push(entry);
         Ok(())
     }
+}
+
+/// A resource of which a checkpoint keeps a part, the rest being scratch or settings its
+/// plugin makes again (see [`PluginContext::checkpoint_part`]).
+pub trait CheckpointPart: Resource<Mutability = bevy_ecs::component::Mutable> {
+    /// What a checkpoint keeps.
+    type Part: Serialize + DeserializeOwned;
+    /// The part to save.
+    fn save_part(&self) -> Self::Part;
+    /// Put a saved part back.
+    fn restore_part(&mut self, part: Self::Part);
 }

@@ -50,6 +50,35 @@ struct RowStats {
     nan_at: Option<usize>,
 }
 
+/// What a checkpoint keeps of the [`Diagnostics`] (the row sums are scratch; a restored run
+/// has not failed).
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+pub struct KeptDiagnostics {
+    /// The last sample: the next adaptive step is chosen from it.
+    pub sample: Sample,
+    /// The blow-up guard's reference.
+    pub omega0: f64,
+    /// The fallback step: it depends on the end time the run started with, which a restart
+    /// may change.
+    pub dt_fallback: f64,
+}
+
+impl crate::schedule::CheckpointPart for Diagnostics {
+    type Part = KeptDiagnostics;
+    fn save_part(&self) -> KeptDiagnostics {
+        KeptDiagnostics {
+            sample: self.sample,
+            omega0: self.omega0,
+            dt_fallback: self.dt_fallback,
+        }
+    }
+    fn restore_part(&mut self, kept: KeptDiagnostics) {
+        self.sample = kept.sample;
+        self.omega0 = kept.omega0;
+        self.dt_fallback = kept.dt_fallback;
+    }
+}
+
 /// Where the extremes of a measured state are (grid node indices).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Extremes {
@@ -511,6 +540,7 @@ impl crate::schedule::Plugin for DiagnosticsPlugin {
         let grid = ctx.world.resource::<Grid>();
         let diag = Diagnostics::new(grid, end.map_or(f64::INFINITY, |t| t / 100.0));
         ctx.insert_resource(diag);
+        ctx.checkpoint_part::<Diagnostics>("diagnostics", 1)?;
         ctx.add_startup_system_in(
             PhysicsSet::Diagnostics,
             "diagnostics_init",

@@ -57,15 +57,15 @@ impl TransportScratch {
             reverse: false,
         }
     }
+}
 
-    /// Whether the next step sweeps the axes in reverse order (the split order alternates
-    /// every step; a checkpoint keeps it).
-    pub fn reverse(&self) -> bool {
+/// A checkpoint keeps the split order, which alternates every step (the pool is scratch).
+impl crate::schedule::CheckpointPart for TransportScratch {
+    type Part = bool;
+    fn save_part(&self) -> bool {
         self.reverse
     }
-
-    /// Set the order of the next step's sweeps (restoring a checkpoint).
-    pub fn set_reverse(&mut self, reverse: bool) {
+    fn restore_part(&mut self, reverse: bool) {
         self.reverse = reverse;
     }
 }
@@ -314,6 +314,7 @@ impl crate::schedule::Plugin for TransportPlugin {
         use crate::schedule::PhysicsSet;
         let scratch = TransportScratch::new(ctx.world.resource::<Grid>());
         ctx.insert_resource(scratch);
+        ctx.checkpoint_part::<TransportScratch>("transport", 1)?;
         if ctx.mode().fluid() {
             ctx.add_system(PhysicsSet::Transport, "transport", transport)?;
         }

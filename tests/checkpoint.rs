@@ -699,14 +699,15 @@ fn bad_checkpoints_are_refused() {
     flipped[mid] ^= 0x5a;
     let e = refused(&write("flip.bin", &flipped), &[], "flipped byte");
     assert!(e.contains("checksum"), "{e}");
-    // The tumble version string follows magic (8), format (4) and its length (8).
+    // The tumble version string follows magic (8), format (4) and its length (one byte, a
+    // postcard varint).
     let mut version = good.clone();
-    let vlen = u64::from_le_bytes(version[12..20].try_into().unwrap()) as usize;
+    let vlen = version[12] as usize;
     assert_eq!(
-        &version[20..20 + vlen],
+        &version[13..13 + vlen],
         tumble::io::checkpoint::CRATE_VERSION.as_bytes()
     );
-    version[20] = b'7';
+    version[13] = b'7';
     let e = refused(&write("version.bin", &version), &[], "other version");
     assert!(e.contains("written by tumble 7"), "{e}");
     let mut format = good.clone();
@@ -739,6 +740,67 @@ fn bad_checkpoints_are_refused() {
         "0.2",
         "--quiet",
     ]));
+}
+
+/// Files that are not checkpoints of this format are refused, each with what it is and what
+/// this tumble reads: a checkpoint of the earlier, hand-written format, one of a format not
+/// known, bytes that are no checkpoint at all, an empty file and every cut of a good one.
+#[test]
+fn old_foreign_and_cut_files_are_refused_by_what_they_are() {
+    use tumble::io::checkpoint::{CRATE_VERSION, FORMAT_VERSION, MAGIC};
+    let file = Path::new("memory");
+    let refused = |bytes: &[u8]| match Checkpoint::from_bytes(bytes, file) {
+        Ok(_) => panic!("{} bytes read as a checkpoint", bytes.len()),
+        Err(e) => e.to_string(),
+    };
+    let reads = format!("reads checkpoints of format {FORMAT_VERSION}");
+    // Format 2: the magic, the format, the tumble version (u64 length and text), the rest.
+    let mut old = MAGIC.to_vec();
+    old.extend(2u32.to_le_bytes());
+    old.extend(5u64.to_le_bytes());
+    old.extend(b"0.0.9");
+    old.extend([0u8; 64]);
+    let e = refused(&old);
+    assert!(
+        e.contains("format 2") && e.contains("hand-written") && e.contains("tumble 0.0.9"),
+        "{e}"
+    );
+    assert!(e.contains(&reads) && e.contains(CRATE_VERSION), "{e}");
+    let mut newer = MAGIC.to_vec();
+    newer.extend((FORMAT_VERSION + 1).to_le_bytes());
+    let e = refused(&newer);
+    assert!(e.contains(&format!("format {}", FORMAT_VERSION + 1)), "{e}");
+    assert!(e.contains(&reads), "{e}");
+    // Random bytes (a fixed sequence) and an empty file.
+    let mut x = 0x9e3779b97f4a7c15u64;
+    let noise: Vec<u8> = (0..4096)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x as u8
+        })
+        .collect();
+    let e = refused(&noise);
+    assert!(
+        e.contains("not a tumble checkpoint") && e.contains(&reads),
+        "{e}"
+    );
+    let e = refused(b"");
+    assert!(e.contains("empty") && e.contains(&reads), "{e}");
+    // Every cut of a good checkpoint: within the header, the state and the trailer.
+    let mut s = sim(BOX_2D);
+    s.step().unwrap();
+    let good = checkpoint::to_bytes(&mut s, &RunProgress::default());
+    Checkpoint::from_bytes(&good, file).unwrap();
+    let n = good.len();
+    let cuts = (1..64)
+        .chain((1..200).map(|k| k * n / 200))
+        .chain(n - 16..n);
+    for cut in cuts {
+        let e = refused(&good[..cut]);
+        assert!(e.contains("truncated"), "cut at {cut} of {n}: {e}");
+    }
 }
 
 #[test]
@@ -778,7 +840,11 @@ fn blow_up_keeps_the_last_good_checkpoint() {
     let log = std::fs::read_to_string(out.join("log.txt")).unwrap();
     assert!(log.contains(&named), "{log}");
     // The checkpoint is from before the failure: its state passed the guard.
-    assert!(ck.sample.max_omega <= 80.0 * ck.omega0);
+    let sim = ck.simulation(ck.scene().unwrap()).unwrap();
+    let diag = sim
+        .world
+        .resource::<tumble::systems::diagnostics::Diagnostics>();
+    assert!(diag.sample.max_omega <= 80.0 * diag.omega0);
     assert!(ck.time.step >= 5);
 }
 

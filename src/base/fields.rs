@@ -166,7 +166,7 @@ impl Params {
 }
 
 /// Simulated time.
-#[derive(Resource, Debug, Clone, Default)]
+#[derive(Resource, Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct SimTime {
     /// Current time.
     pub t: f64,
@@ -188,7 +188,7 @@ pub struct Failure {
 }
 
 /// Global diagnostics of the current state.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sample {
     /// Time.
     pub t: f64,

@@ -61,7 +61,7 @@ impl Body {
 }
 
 /// The rigid state of a body.
-#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RigidState {
     /// Centre (the body frame's origin), world coordinates.
     pub center: DVec3,
@@ -99,7 +99,7 @@ impl RigidState {
 /// The rigid velocity ū of the previous step (V, Ω), kept by `rigid_update`: with the
 /// current one it gives the body's acceleration, which the baroclinic term uses as the
 /// acceleration of the fluid on the body's interface (no slip).
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct PreviousVelocity {
     /// V of the previous step.
     pub velocity: DVec3,
@@ -153,7 +153,7 @@ impl GridPatch {
 }
 
 /// Hydrodynamic force and torque on a body (from the penalization term), world frame.
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Hydro {
     /// Force.
     pub force: DVec3,
@@ -163,7 +163,7 @@ pub struct Hydro {
 
 /// Contact state of a body: its own κ, and the contact force and torque the collision
 /// system found this step (world frame; torque about the χ-centroid).
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactState {
     /// This body's contact strength κ, length³/time²: its `kappa`, else the scene's
     /// `contact.kappa`; `None` if neither is given, the body then taking each pair's default
@@ -252,7 +252,7 @@ impl ContactPoints {
 
 /// Angular momentum ρ_i J Ω of a body moving in vacuum (the flow solver off), world frame;
 /// `None` until the first step sets it.
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct FreeMotion {
     /// ρ_i J Ω, kept so a free body's rotation conserves angular momentum as J turns.
     pub angular_momentum: Option<DVec3>,

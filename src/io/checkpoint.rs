@@ -4,39 +4,38 @@
 //! same scene and stepping on gives results identical bit for bit to the run that was never
 //! stopped, so it holds every piece of state a step reads before recomputing it:
 //!
-//! * the fields: ω, u, the previous velocity u_prev and the step between them (the mid-step
-//!   extrapolation in transport and ∂u/∂t in the baroclinic term read them). The spectral
-//!   solver's cached ω̂ is not kept: every step makes a new vorticity version (transport)
-//!   before the Poisson solve, so the cache is never carried from one step to the next; it is
-//!   invalidated on restore all the same;
+//! * the fields: ω, u, the previous velocity u_prev (single precision, as the run keeps it)
+//!   and the step between them (the mid-step extrapolation in transport and ∂u/∂t in the
+//!   baroclinic term read them). The spectral solver's cached ω̂ is not kept: every step makes
+//!   a new vorticity version (transport) before the Poisson solve, so the cache is never
+//!   carried from one step to the next; it is invalidated on restore all the same;
 //! * the clock ([`SimTime`]: t, the next dt, the step count, the stop time);
-//! * the diagnostics: the last sample (the next adaptive dt is chosen from it), the initial
-//!   max|ω| (the blow-up guard's reference) and the fallback step (it depends on the end time
-//!   the run started with, which a restart may change);
-//! * the transport's split order, which alternates every step and is stored, not derived;
 //! * every body's [`RigidState`] (pose, velocities, and the volume, χ-centroid and inertia of
 //!   the last step, which the contact system reads before they are recomputed), [`Hydro`],
-//!   [`ContactState`] (its own κ written as an f64, NaN for `None`: the body takes each pair's
-//!   scaled default) and [`FreeMotion`] (the angular momentum a body in vacuum carries),
-//!   matched by [`Body::id`]. Level-set patches, density and χ are recomputed from the poses at
-//!   the start of every step; kinematic prescriptions are functions of t;
+//!   [`ContactState`] (with its own κ), [`FreeMotion`] (the angular momentum a body in vacuum
+//!   carries) and [`PreviousVelocity`], matched by [`Body::id`]. Level-set patches, density
+//!   and χ are recomputed from the poses at the start of every step; kinematic prescriptions
+//!   are functions of t;
 //! * the scene as RON text (and the directory its mesh paths are relative to), and where the
 //!   run's outputs stood ([`RunProgress`]: CSV lengths, snapshot count, `.pvd` entries, the
 //!   next output time), so a restarted run continues its files without duplicate rows. HDF5
 //!   outputs need nothing more here: a restart reads the times of the `.h5` snapshots kept
 //!   (for `fields.xmf`) and `series.h5`, written at every checkpoint, back from the run
-//!   directory (see [`crate::io::snapshots::Snapshots::resume`]).
+//!   directory (see [`crate::io::snapshots::Snapshots::resume`]);
+//! * the state the systems keep, registered by their plugins
+//!   ([`crate::schedule::PluginContext::checkpoint_resource`] and `checkpoint_part`): the
+//!   diagnostics' last sample, the transport's split order, the pressure coupling's state, the
+//!   free surface, a user plugin's resources. One record per resource, its name, layout
+//!   version and serde bytes, so this file knows no system: a record missing, left over or of
+//!   another version is refused by name.
 //!
-//! * the state the plugins registered ([`crate::schedule::PluginContext::checkpoint_resource`]):
-//!   one record per resource, its name, layout version and serde (postcard) bytes, so a new
-//!   system's state needs no encoder here. A record missing, left over or of another
-//!   version is refused by name.
-//!
-//! Format (little-endian): the magic `TUMBLECK`, the format version (u32), the tumble version
-//! (string), the CRC-32 of the scene text, the payload (f64 as raw bits, so values come back
-//! exactly), then a trailer: the byte length before it (u64), the CRC-32 of those bytes and
-//! `KEND`. A checkpoint from another format or tumble version, a truncated or corrupt file
-//! (trailer or checksum) is refused with a [`CheckpointError`] naming the file.
+//! Format: the magic `TUMBLECK` and the format version (u32, little-endian), which say what
+//! the file is before anything else is read; then, serde in the postcard encoding, the header
+//! (the tumble version) and the state; then a trailer: the byte length before it (u64,
+//! little-endian), the CRC-32 of those bytes and `KEND`. Floats are written as their bits, so
+//! values come back exactly. A foreign file, a checkpoint of another format (the hand-written
+//! layout of format 2 and before) or of another tumble version, a truncated or corrupt file
+//! (trailer or checksum) is refused with a [`CheckpointError`] naming the file and what it is.
 //!
 //! A run writes `checkpoint_NNNNNN.bin` (named by step, [`file_name`]) with
 //! [`atomic_write_with`] (temporary `.checkpoint_NNNNNN.bin.tmp-*` in the same directory,
@@ -44,17 +43,16 @@
 //! oldest beyond `output.checkpoints_kept` are deleted ([`prune`], only files of that name).
 //! `--restart DIR` takes the latest ([`resolve`]).
 
-use crate::base::fields::{Failure, Fields, Sample, SimTime};
+use crate::base::fields::{Failure, Fields, SimTime};
 use crate::bodies::{Body, ContactState, FreeMotion, Hydro, PreviousVelocity, RigidState};
 use crate::io::output::atomic_write_with;
 use crate::scene::{Scene, ValidScene};
 use crate::schedule::StateRecord;
 use crate::sim::engine::Simulation;
 use crate::solvers::Spectral;
-use crate::systems::diagnostics::Diagnostics;
-use crate::systems::transport::TransportScratch;
-use glam::{DMat3, DQuat, DVec3};
-use std::io::{self, Write};
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
+use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -67,8 +65,12 @@ const PREFIX: &str = "checkpoint_";
 pub const MAGIC: [u8; 8] = *b"TUMBLECK";
 /// Last bytes of every complete checkpoint.
 const END_MAGIC: [u8; 4] = *b"KEND";
-/// Version of the layout; a checkpoint of another format version is refused.
-pub const FORMAT_VERSION: u32 = 2;
+/// The trailer: byte length (u64), CRC-32 (u32), [`END_MAGIC`].
+const TRAILER: usize = 16;
+/// Version of the layout; a checkpoint of another format version is refused. Formats 1 and 2
+/// were hand-written; format 3 is serde (postcard) throughout. It changes with the serialized
+/// layout of anything saved here: [`RunProgress`], [`SimTime`] and the body components.
+pub const FORMAT_VERSION: u32 = 3;
 /// The tumble version that writes (and alone restarts) these checkpoints.
 pub const CRATE_VERSION: &str = env!("CARGO_PKG_VERSION");
 
@@ -241,7 +243,7 @@ pub fn resolve(path: &Path) -> Result<PathBuf, CheckpointError> {
 }
 
 /// Where a run's outputs stood when its checkpoint was written.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct RunProgress {
     /// The next snapshot time, if snapshots are periodic.
     pub next_out: Option<f64>,
@@ -258,7 +260,7 @@ pub struct RunProgress {
 }
 
 /// The saved state of one body.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BodyState {
     /// [`Body::id`].
     pub id: usize,
@@ -290,186 +292,127 @@ pub struct Checkpoint {
     pub progress: RunProgress,
     /// The clock.
     pub time: SimTime,
-    /// The last diagnostics sample.
-    pub sample: Sample,
-    /// Initial max|ω| (the blow-up guard's reference).
-    pub omega0: f64,
-    /// The fallback step of the adaptive time step.
-    pub dt_fallback: f64,
-    /// Whether the next transport step sweeps the axes in reverse.
-    pub reverse: bool,
     /// Grid node counts.
     pub n: [usize; 3],
     /// Vorticity components.
     pub omega: Vec<Vec<f64>>,
     /// Velocity components.
     pub u: Vec<Vec<f64>>,
-    /// Previous velocity components (kept in single precision by the run, widened here).
-    pub u_prev: Vec<Vec<f64>>,
+    /// Previous velocity components (single precision, as the run keeps them).
+    pub u_prev: Vec<Vec<f32>>,
     /// The step between `u_prev` and `u`.
     pub dt_prev: f64,
     /// Bodies, by id.
     pub bodies: Vec<BodyState>,
-    /// The plugins' state records.
+    /// The state records of the systems (see the module docs).
     pub state: Vec<StateRecord>,
 }
 
-/// Little-endian writer that counts and checksums what it writes.
-struct Enc<W: Write> {
+/// What follows the magic and the format version.
+#[derive(Serialize, Deserialize)]
+struct Header {
+    /// The tumble version that wrote the file.
+    tumble: String,
+}
+
+/// The fields a step reads before recomputing them (borrowed from the simulation when
+/// written).
+#[derive(Serialize, Deserialize)]
+struct SavedFields<'a> {
+    n: [usize; 3],
+    omega: Cow<'a, [Vec<f64>]>,
+    u: Cow<'a, [Vec<f64>]>,
+    u_prev: Cow<'a, [Vec<f32>]>,
+    dt_prev: f64,
+}
+
+/// Everything after the header, as serde writes and reads it.
+#[derive(Serialize, Deserialize)]
+struct Saved<'a> {
+    scene_ron: String,
+    base_dir: String,
+    progress: Cow<'a, RunProgress>,
+    time: SimTime,
+    fields: SavedFields<'a>,
+    bodies: Vec<BodyState>,
+    state: Vec<StateRecord>,
+}
+
+impl<'a> Saved<'a> {
+    /// The state of `sim` (between two steps) and the run's `progress`.
+    fn of(sim: &'a mut Simulation, progress: &'a RunProgress) -> io::Result<Saved<'a>> {
+        let bodies = body_states(sim);
+        let state = sim.save_state().map_err(io::Error::other)?;
+        let sim: &'a Simulation = sim;
+        let scene = sim.scene();
+        let base_dir = std::path::absolute(&scene.base_dir).unwrap_or(scene.base_dir.clone());
+        let f = sim.world.resource::<Fields>();
+        Ok(Saved {
+            scene_ron: scene.to_ron(),
+            base_dir: base_dir.to_string_lossy().into_owned(),
+            progress: Cow::Borrowed(progress),
+            time: sim.world.resource::<SimTime>().clone(),
+            fields: SavedFields {
+                n: sim.grid().n,
+                omega: Cow::Borrowed(f.omega()),
+                u: Cow::Borrowed(&f.u),
+                u_prev: Cow::Borrowed(&f.u_prev),
+                dt_prev: f.dt_prev,
+            },
+            bodies,
+            state,
+        })
+    }
+}
+
+/// A writer that counts and checksums the bytes passed to the one under it, and keeps that
+/// writer's first error (postcard reports a failed write without its cause, e.g. a full
+/// disk).
+struct Checksummed<W: Write> {
     w: W,
     crc: crc32fast::Hasher,
     len: u64,
-    buf: Vec<u8>,
+    error: Option<io::Error>,
 }
 
-impl<W: Write> Enc<W> {
-    fn bytes(&mut self, b: &[u8]) -> io::Result<()> {
+impl<W: Write> Write for Checksummed<W> {
+    fn write(&mut self, b: &[u8]) -> io::Result<usize> {
+        if let Err(e) = self.w.write_all(b) {
+            let again = io::Error::new(e.kind(), e.to_string());
+            self.error.get_or_insert(e);
+            return Err(again);
+        }
         self.crc.update(b);
         self.len += b.len() as u64;
-        self.w.write_all(b)
+        Ok(b.len())
     }
-    fn u8(&mut self, v: u8) -> io::Result<()> {
-        self.bytes(&[v])
-    }
-    fn u32(&mut self, v: u32) -> io::Result<()> {
-        self.bytes(&v.to_le_bytes())
-    }
-    fn u64(&mut self, v: u64) -> io::Result<()> {
-        self.bytes(&v.to_le_bytes())
-    }
-    fn f64(&mut self, v: f64) -> io::Result<()> {
-        self.bytes(&v.to_bits().to_le_bytes())
-    }
-    fn opt_f64(&mut self, v: Option<f64>) -> io::Result<()> {
-        match v {
-            Some(x) => {
-                self.u8(1)?;
-                self.f64(x)
-            }
-            None => self.u8(0),
-        }
-    }
-    fn opt_u64(&mut self, v: Option<u64>) -> io::Result<()> {
-        match v {
-            Some(x) => {
-                self.u8(1)?;
-                self.u64(x)
-            }
-            None => self.u8(0),
-        }
-    }
-    fn str(&mut self, s: &str) -> io::Result<()> {
-        self.u64(s.len() as u64)?;
-        self.bytes(s.as_bytes())
-    }
-    fn vec3(&mut self, v: DVec3) -> io::Result<()> {
-        self.f64(v.x)?;
-        self.f64(v.y)?;
-        self.f64(v.z)
-    }
-    fn f64s<T: Copy + Into<f64>>(&mut self, v: &[T]) -> io::Result<()> {
-        self.u64(v.len() as u64)?;
-        let mut buf = std::mem::take(&mut self.buf);
-        for chunk in v.chunks(8192) {
-            buf.clear();
-            for &x in chunk {
-                buf.extend_from_slice(&x.into().to_bits().to_le_bytes());
-            }
-            self.bytes(&buf)?;
-        }
-        self.buf = buf;
-        Ok(())
-    }
-    /// A field's components as doubles (single precision ones are widened, exactly).
-    fn fields<T: Copy + Into<f64>>(&mut self, f: &[Vec<T>]) -> io::Result<()> {
-        self.u32(f.len() as u32)?;
-        for c in f {
-            self.f64s(c)?;
-        }
-        Ok(())
+    fn flush(&mut self) -> io::Result<()> {
+        self.w.flush()
     }
 }
 
-/// Reader of what [`Enc`] writes; every error is a message for a [`CheckpointError`].
-struct Dec<'a> {
-    b: &'a [u8],
-    pos: usize,
-}
+impl<W: Write> Checksummed<W> {
+    /// Magic, format version, then header and `saved` in postcard.
+    fn data(&mut self, saved: &Saved) -> io::Result<()> {
+        self.write_all(&MAGIC)?;
+        self.write_all(&FORMAT_VERSION.to_le_bytes())?;
+        let header = Header {
+            tumble: CRATE_VERSION.to_string(),
+        };
+        let encode = |e| io::Error::other(format!("cannot encode the checkpoint: {e}"));
+        let mut buf = BufWriter::with_capacity(1 << 16, &mut *self);
+        postcard::to_io(&header, &mut buf).map_err(encode)?;
+        postcard::to_io(saved, &mut buf).map_err(encode)?;
+        buf.flush()
+    }
 
-impl<'a> Dec<'a> {
-    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
-        if self.b.len() - self.pos < n {
-            return Err("the file is truncated (it ends inside its data)".into());
-        }
-        let s = &self.b[self.pos..self.pos + n];
-        self.pos += n;
-        Ok(s)
-    }
-    fn u8(&mut self) -> Result<u8, String> {
-        Ok(self.take(1)?[0])
-    }
-    fn u32(&mut self) -> Result<u32, String> {
-        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
-    }
-    fn u64(&mut self) -> Result<u64, String> {
-        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
-    }
-    fn f64(&mut self) -> Result<f64, String> {
-        Ok(f64::from_bits(self.u64()?))
-    }
-    fn flag(&mut self) -> Result<bool, String> {
-        match self.u8()? {
-            0 => Ok(false),
-            1 => Ok(true),
-            v => Err(format!("corrupt data (flag {v} at byte {})", self.pos - 1)),
-        }
-    }
-    fn opt_f64(&mut self) -> Result<Option<f64>, String> {
-        Ok(if self.flag()? {
-            Some(self.f64()?)
-        } else {
-            None
-        })
-    }
-    fn opt_u64(&mut self) -> Result<Option<u64>, String> {
-        Ok(if self.flag()? {
-            Some(self.u64()?)
-        } else {
-            None
-        })
-    }
-    fn len(&mut self, elem: usize) -> Result<usize, String> {
-        let n = self.u64()?;
-        if n > ((self.b.len() - self.pos) / elem) as u64 {
-            return Err(format!(
-                "corrupt data (a length of {n} at byte {} runs past the end)",
-                self.pos - 8
-            ));
-        }
-        Ok(n as usize)
-    }
-    fn str(&mut self) -> Result<String, String> {
-        let n = self.len(1)?;
-        String::from_utf8(self.take(n)?.to_vec())
-            .map_err(|_| format!("corrupt data (text that is not UTF-8 at byte {})", self.pos))
-    }
-    fn vec3(&mut self) -> Result<DVec3, String> {
-        Ok(DVec3::new(self.f64()?, self.f64()?, self.f64()?))
-    }
-    fn f64s(&mut self) -> Result<Vec<f64>, String> {
-        let n = self.len(8)?;
-        Ok(self
-            .take(8 * n)?
-            .chunks_exact(8)
-            .map(|c| f64::from_bits(u64::from_le_bytes(c.try_into().unwrap())))
-            .collect())
-    }
-    fn fields(&mut self) -> Result<Vec<Vec<f64>>, String> {
-        let nc = self.u32()?;
-        if nc > 3 {
-            return Err(format!("corrupt data ({nc} field components)"));
-        }
-        (0..nc).map(|_| self.f64s()).collect()
+    /// The byte length and checksum of everything written, and the end marker.
+    fn trailer(mut self) -> io::Result<()> {
+        let crc = self.crc.clone().finalize();
+        self.w.write_all(&self.len.to_le_bytes())?;
+        self.w.write_all(&crc.to_le_bytes())?;
+        self.w.write_all(&END_MAGIC)?;
+        self.w.flush()
     }
 }
 
@@ -501,114 +444,17 @@ pub fn body_states(sim: &mut Simulation) -> Vec<BodyState> {
 
 /// Write a checkpoint of `sim` (between two steps) and the run's `progress` to `w`.
 pub fn write_to(w: impl Write, sim: &mut Simulation, progress: &RunProgress) -> io::Result<()> {
-    let bodies = body_states(sim);
-    let scene_ron = sim.scene().to_ron();
-    let base_dir =
-        std::path::absolute(&sim.scene().base_dir).unwrap_or_else(|_| sim.scene().base_dir.clone());
-    let mut e = Enc {
+    let saved = Saved::of(sim, progress)?;
+    let mut out = Checksummed {
         w,
         crc: crc32fast::Hasher::new(),
         len: 0,
-        buf: Vec::with_capacity(8 * 8192),
+        error: None,
     };
-    e.bytes(&MAGIC)?;
-    e.u32(FORMAT_VERSION)?;
-    e.str(CRATE_VERSION)?;
-    e.u32(crc32fast::hash(scene_ron.as_bytes()))?;
-    e.str(&scene_ron)?;
-    e.str(&base_dir.to_string_lossy())?;
-    // Outputs.
-    e.opt_f64(progress.next_out)?;
-    e.u64(progress.snapshots)?;
-    e.u64(progress.pvd.len() as u64)?;
-    for (t, f) in &progress.pvd {
-        e.f64(*t)?;
-        e.str(f)?;
+    if let Err(e) = out.data(&saved) {
+        return Err(out.error.take().unwrap_or(e));
     }
-    e.u64(progress.series_len)?;
-    e.opt_u64(progress.bodies_len)?;
-    e.opt_u64(progress.contacts_len)?;
-    // Clock, diagnostics, transport.
-    let time = sim.world.resource::<SimTime>().clone();
-    e.f64(time.t)?;
-    e.f64(time.dt)?;
-    e.u64(time.step)?;
-    e.opt_f64(time.stop_at)?;
-    let diag = sim.world.resource::<Diagnostics>();
-    let s = diag.sample;
-    for v in [
-        s.t,
-        s.dt,
-        s.energy,
-        s.enstrophy,
-        s.circulation,
-        s.max_omega,
-        s.max_u,
-        diag.omega0,
-        diag.dt_fallback,
-    ] {
-        e.f64(v)?;
-    }
-    e.u8(sim.world.resource::<TransportScratch>().reverse() as u8)?;
-    // Fields.
-    let n = sim.grid().n;
-    for a in n {
-        e.u64(a as u64)?;
-    }
-    let f = sim.world.resource::<Fields>();
-    e.fields(f.omega())?;
-    e.fields(&f.u)?;
-    e.fields(&f.u_prev)?;
-    e.f64(f.dt_prev)?;
-    // Bodies.
-    e.u64(bodies.len() as u64)?;
-    for b in &bodies {
-        e.u64(b.id as u64)?;
-        e.str(&b.name)?;
-        let r = &b.rigid;
-        e.vec3(r.center)?;
-        for v in r.orientation.to_array() {
-            e.f64(v)?;
-        }
-        e.vec3(r.velocity)?;
-        e.vec3(r.angular_velocity)?;
-        e.f64(r.volume)?;
-        e.vec3(r.centroid)?;
-        for v in r.inertia.to_cols_array() {
-            e.f64(v)?;
-        }
-        e.vec3(b.hydro.force)?;
-        e.vec3(b.hydro.torque)?;
-        e.f64(b.contact.kappa.unwrap_or(f64::NAN))?;
-        e.vec3(b.contact.force)?;
-        e.vec3(b.contact.torque)?;
-        e.f64(b.contact.potential)?;
-        match b.free.angular_momentum {
-            Some(l) => {
-                e.u8(1)?;
-                e.vec3(l)?;
-            }
-            None => e.u8(0)?,
-        }
-        e.vec3(b.prev.velocity)?;
-        e.vec3(b.prev.angular_velocity)?;
-    }
-    // Plugin state records.
-    let records = sim.save_state().map_err(io::Error::other)?;
-    e.u64(records.len() as u64)?;
-    for r in &records {
-        e.str(&r.name)?;
-        e.u32(r.version)?;
-        e.u64(r.bytes.len() as u64)?;
-        e.bytes(&r.bytes)?;
-    }
-    // Trailer.
-    let len = e.len;
-    let crc = e.crc.clone().finalize();
-    e.w.write_all(&len.to_le_bytes())?;
-    e.w.write_all(&crc.to_le_bytes())?;
-    e.w.write_all(&END_MAGIC)?;
-    e.w.flush()
+    out.trailer()
 }
 
 /// A checkpoint of `sim` as bytes.
@@ -670,59 +516,62 @@ impl Checkpoint {
 
     /// Overwrite the state of `sim`, built from the checkpoint's scene, with the checkpoint's.
     pub fn restore(&self, sim: &mut Simulation) -> Result<(), CheckpointError> {
-        let grid = sim.grid().clone();
+        self.check_fits(sim)?;
+        self.restore_fields(sim);
+        *sim.world.resource_mut::<SimTime>() = self.time.clone();
+        sim.world.resource_mut::<Failure>().reason = None;
+        self.restore_bodies(sim);
+        sim.restore_state(&self.state).map_err(|m| self.error(m))
+    }
+
+    /// Whether the fields fit the grid of `sim` and the bodies are its bodies.
+    fn check_fits(&self, sim: &mut Simulation) -> Result<(), CheckpointError> {
+        let grid = sim.grid();
         if grid.n != self.n {
             return Err(self.error(format!(
                 "its grid has {:?} nodes, the scene's has {:?}",
                 self.n, grid.n
             )));
         }
-        let shape_ok =
-            |f: &[Vec<f64>], nc: usize| f.len() == nc && f.iter().all(|c| c.len() == grid.len());
-        if !shape_ok(&self.omega, grid.omega_components())
-            || !shape_ok(&self.u, grid.dim)
-            || !shape_ok(&self.u_prev, grid.dim)
+        fn fits<T>(f: &[Vec<T>], nc: usize, len: usize) -> bool {
+            f.len() == nc && f.iter().all(|c| c.len() == len)
+        }
+        if !fits(&self.omega, grid.omega_components(), grid.len())
+            || !fits(&self.u, grid.dim, grid.len())
+            || !fits(&self.u_prev, grid.dim, grid.len())
         {
             return Err(self.error("its fields do not fit the scene's grid"));
         }
-        let states = body_states(sim);
-        let ids: Vec<(usize, &str)> = states.iter().map(|b| (b.id, b.name.as_str())).collect();
-        let saved: Vec<(usize, &str)> = self
-            .bodies
-            .iter()
-            .map(|b| (b.id, b.name.as_str()))
+        let ids: Vec<(usize, String)> = body_states(sim)
+            .into_iter()
+            .map(|b| (b.id, b.name))
             .collect();
+        let saved: Vec<(usize, String)> =
+            self.bodies.iter().map(|b| (b.id, b.name.clone())).collect();
         if ids != saved {
             return Err(self.error(format!("its bodies {saved:?} are not the scene's {ids:?}")));
         }
-        {
-            let mut f = sim.world.resource_mut::<Fields>();
-            for (dst, src) in f.omega_mut().iter_mut().zip(&self.omega) {
-                dst.copy_from_slice(src);
-            }
-            for (dst, src) in f.u.iter_mut().zip(&self.u) {
-                dst.copy_from_slice(src);
-            }
-            for (dst, src) in f.u_prev.iter_mut().zip(&self.u_prev) {
-                // Saved from single precision, so exact.
-                for (d, &s) in dst.iter_mut().zip(src) {
-                    *d = s as f32;
-                }
-            }
-            f.dt_prev = self.dt_prev;
+        Ok(())
+    }
+
+    /// ω, u, u_prev and the step between them; the spectral solver's cached ω̂ is dropped.
+    fn restore_fields(&self, sim: &mut Simulation) {
+        let mut f = sim.world.resource_mut::<Fields>();
+        for (dst, src) in f.omega_mut().iter_mut().zip(&self.omega) {
+            dst.copy_from_slice(src);
         }
+        for (dst, src) in f.u.iter_mut().zip(&self.u) {
+            dst.copy_from_slice(src);
+        }
+        for (dst, src) in f.u_prev.iter_mut().zip(&self.u_prev) {
+            dst.copy_from_slice(src);
+        }
+        f.dt_prev = self.dt_prev;
         sim.world.resource_mut::<Spectral>().invalidate();
-        *sim.world.resource_mut::<SimTime>() = self.time.clone();
-        {
-            let mut d = sim.world.resource_mut::<Diagnostics>();
-            d.sample = self.sample;
-            d.omega0 = self.omega0;
-            d.dt_fallback = self.dt_fallback;
-        }
-        sim.world.resource_mut::<Failure>().reason = None;
-        sim.world
-            .resource_mut::<TransportScratch>()
-            .set_reverse(self.reverse);
+    }
+
+    /// Every body's components, matched by id (checked by [`Checkpoint::check_fits`]).
+    fn restore_bodies(&self, sim: &mut Simulation) {
         let mut q = sim.world.query::<(
             &Body,
             &mut RigidState,
@@ -735,214 +584,170 @@ impl Checkpoint {
             let s = &self.bodies[self
                 .bodies
                 .binary_search_by_key(&b.id, |s| s.id)
-                .expect("ids checked above")];
+                .expect("ids checked before")];
             *r = s.rigid;
             *h = s.hydro;
             *c = s.contact;
             *f = s.free;
             *p = s.prev;
         }
-        sim.restore_state(&self.state).map_err(|m| self.error(m))?;
-        Ok(())
+    }
+
+    /// The checkpoint read from `file` as `saved`.
+    fn from_saved(file: &Path, saved: Saved) -> Result<Checkpoint, String> {
+        if !saved.bodies.windows(2).all(|w| w[0].id < w[1].id) {
+            return Err("corrupt data (bodies out of order)".into());
+        }
+        let f = saved.fields;
+        Ok(Checkpoint {
+            file: file.to_path_buf(),
+            scene_ron: saved.scene_ron,
+            base_dir: PathBuf::from(saved.base_dir),
+            progress: saved.progress.into_owned(),
+            time: saved.time,
+            n: f.n,
+            omega: f.omega.into_owned(),
+            u: f.u.into_owned(),
+            u_prev: f.u_prev.into_owned(),
+            dt_prev: f.dt_prev,
+            bodies: saved.bodies,
+            state: saved.state,
+        })
     }
 }
 
+/// Check and decode the bytes of a checkpoint read from `file`: what the file is, who wrote
+/// it, whether it is whole, then its state.
 fn decode(b: &[u8], file: &Path) -> Result<Checkpoint, String> {
-    if b.len() < MAGIC.len() || b[..MAGIC.len()] != MAGIC {
-        return Err("not a tumble checkpoint (it does not start with the TUMBLECK header)".into());
+    let after_format = identify(b)?;
+    let after_header = check_header(after_format)?;
+    let data = check_trailer(b, b.len() - after_header.len())?;
+    let (saved, rest) =
+        postcard::take_from_bytes::<Saved>(data).map_err(|e| format!("corrupt data ({e})"))?;
+    if !rest.is_empty() {
+        return Err(format!(
+            "corrupt data ({} unexpected bytes at the end)",
+            rest.len()
+        ));
     }
-    let mut d = Dec {
-        b,
-        pos: MAGIC.len(),
+    Checkpoint::from_saved(file, saved)
+}
+
+/// What this tumble reads, for the messages that refuse a file.
+fn what_is_read() -> String {
+    format!(
+        "this tumble {CRATE_VERSION} reads checkpoints of format {FORMAT_VERSION} (serde, \
+         postcard), written by tumble {CRATE_VERSION}"
+    )
+}
+
+/// The bytes after the magic and the format version if they say the file is a checkpoint of
+/// [`FORMAT_VERSION`]; else what the file is.
+fn identify(b: &[u8]) -> Result<&[u8], String> {
+    let truncated = || {
+        format!(
+            "the file is truncated ({} bytes, not even a header): it was cut short; use an \
+             older checkpoint or rerun the scene",
+            b.len()
+        )
     };
-    let format = d.u32()?;
-    if format != FORMAT_VERSION {
+    let Some(rest) = b.strip_prefix(&MAGIC) else {
+        if b.is_empty() {
+            return Err(format!(
+                "the file is empty, not a tumble checkpoint; {}",
+                what_is_read()
+            ));
+        }
+        if !MAGIC.starts_with(b) {
+            let start = &b[..b.len().min(MAGIC.len())];
+            return Err(format!(
+                "not a tumble checkpoint (it starts with \"{}\", a checkpoint with the \
+                 TUMBLECK header); {}",
+                start.escape_ascii(),
+                what_is_read()
+            ));
+        }
+        return Err(truncated());
+    };
+    let Some((format, rest)) = rest.split_first_chunk::<4>() else {
+        return Err(truncated());
+    };
+    match u32::from_le_bytes(*format) {
+        FORMAT_VERSION => Ok(rest),
+        old @ 1..FORMAT_VERSION => Err(format!(
+            "it is a checkpoint in format {old}, the hand-written layout of earlier builds \
+             ({}); {}: restart it with the tumble that wrote it, or rerun the scene",
+            old_writer(rest).map_or("its writer unknown".into(), |v| format!("by tumble {v}")),
+            what_is_read()
+        )),
+        other => Err(format!(
+            "it is a checkpoint in format {other}, which this tumble does not know; {}: \
+             restart it with the tumble that wrote it, or rerun the scene",
+            what_is_read()
+        )),
+    }
+}
+
+/// The tumble version that wrote a checkpoint of format 1 or 2, from its header (a u64 byte
+/// length and the text), if it reads as one.
+fn old_writer(rest: &[u8]) -> Option<String> {
+    let (len, rest) = rest.split_first_chunk::<8>()?;
+    let text = rest.get(
+        ..usize::try_from(u64::from_le_bytes(*len))
+            .ok()
+            .filter(|&n| n <= 64)?,
+    )?;
+    String::from_utf8(text.to_vec()).ok()
+}
+
+/// The bytes after the header if the tumble version that wrote them is this one.
+fn check_header(b: &[u8]) -> Result<&[u8], String> {
+    let (header, rest) = postcard::take_from_bytes::<Header>(b).map_err(|e| match e {
+        postcard::Error::DeserializeUnexpectedEnd => {
+            "the file is truncated (it ends inside its header): it was cut short; use an older \
+             checkpoint or rerun the scene"
+                .to_string()
+        }
+        e => format!("corrupt header ({e})"),
+    })?;
+    if header.tumble != CRATE_VERSION {
         return Err(format!(
-            "it is in checkpoint format {format}, and this tumble {CRATE_VERSION} reads format \
-             {FORMAT_VERSION} only; rerun the scene"
+            "it was written by tumble {0}, and this is tumble {CRATE_VERSION}: a checkpoint \
+             restarts only with the version that wrote it (use tumble {0}, or rerun the scene)",
+            header.tumble
         ));
     }
-    let vlen = d.u64()?;
-    if vlen > 64 {
-        return Err(format!("corrupt header (a version string of {vlen} bytes)"));
-    }
-    let version = String::from_utf8_lossy(d.take(vlen as usize)?).into_owned();
-    if version != CRATE_VERSION {
-        return Err(format!(
-            "it was written by tumble {version}, and this is tumble {CRATE_VERSION}: a \
-             checkpoint restarts only with the version that wrote it (use tumble {version}, \
-             or rerun the scene)"
-        ));
-    }
-    // Trailer: length and checksum of everything before it, then the end marker.
+    Ok(rest)
+}
+
+/// The bytes from `start` to the trailer, if the trailer is there and their length and
+/// checksum are the ones it gives for everything before it.
+fn check_trailer(b: &[u8], start: usize) -> Result<&[u8], String> {
     let n = b.len();
-    if n < d.pos + 16 || b[n - 4..] != END_MAGIC {
+    if n < start + TRAILER || b[n - 4..] != END_MAGIC {
         return Err(format!(
             "the file is truncated or incomplete ({n} bytes, no end marker): it was cut short, \
              e.g. copied while being written; use an older checkpoint or rerun the scene"
         ));
     }
-    let body_len = u64::from_le_bytes(b[n - 16..n - 8].try_into().unwrap());
-    if body_len != (n - 16) as u64 {
+    let (data, trailer) = b.split_at(n - TRAILER);
+    let len = u64::from_le_bytes(trailer[..8].try_into().expect("8 bytes"));
+    if len != data.len() as u64 {
         return Err(format!(
-            "the file is truncated or corrupt (its trailer gives {body_len} bytes of data, it \
-             holds {})",
-            n - 16
+            "the file is truncated or corrupt (its trailer gives {len} bytes of data, it holds \
+             {})",
+            data.len()
         ));
     }
-    let crc = u32::from_le_bytes(b[n - 8..n - 4].try_into().unwrap());
-    if crc32fast::hash(&b[..n - 16]) != crc {
+    let crc = u32::from_le_bytes(trailer[8..12].try_into().expect("4 bytes"));
+    if crc32fast::hash(data) != crc {
         return Err(
             "the file is corrupt (checksum mismatch): it changed after it was written; use an \
              older checkpoint or rerun the scene"
                 .into(),
         );
     }
-    let b = &b[..n - 16];
-    d.b = b;
-    let scene_hash = d.u32()?;
-    let scene_ron = d.str()?;
-    if crc32fast::hash(scene_ron.as_bytes()) != scene_hash {
-        return Err("corrupt data (the scene text does not match its hash)".into());
-    }
-    let base_dir = PathBuf::from(d.str()?);
-    let next_out = d.opt_f64()?;
-    let snapshots = d.u64()?;
-    let npvd = d.len(9)?;
-    let mut pvd = Vec::with_capacity(npvd);
-    for _ in 0..npvd {
-        let t = d.f64()?;
-        pvd.push((t, d.str()?));
-    }
-    let progress = RunProgress {
-        next_out,
-        snapshots,
-        pvd,
-        series_len: d.u64()?,
-        bodies_len: d.opt_u64()?,
-        contacts_len: d.opt_u64()?,
-    };
-    let time = SimTime {
-        t: d.f64()?,
-        dt: d.f64()?,
-        step: d.u64()?,
-        stop_at: d.opt_f64()?,
-    };
-    let mut v = [0.0; 9];
-    for x in &mut v {
-        *x = d.f64()?;
-    }
-    let sample = Sample {
-        t: v[0],
-        dt: v[1],
-        energy: v[2],
-        enstrophy: v[3],
-        circulation: v[4],
-        max_omega: v[5],
-        max_u: v[6],
-    };
-    let reverse = d.flag()?;
-    let mut grid_n = [0usize; 3];
-    for a in &mut grid_n {
-        *a = d.u64()? as usize;
-    }
-    let omega = d.fields()?;
-    let u = d.fields()?;
-    let u_prev = d.fields()?;
-    let dt_prev = d.f64()?;
-    let nb = d.len(1)?;
-    let mut bodies = Vec::with_capacity(nb);
-    for _ in 0..nb {
-        let id = d.u64()? as usize;
-        let name = d.str()?;
-        let center = d.vec3()?;
-        let mut q = [0.0; 4];
-        for x in &mut q {
-            *x = d.f64()?;
-        }
-        let velocity = d.vec3()?;
-        let angular_velocity = d.vec3()?;
-        let volume = d.f64()?;
-        let centroid = d.vec3()?;
-        let mut m = [0.0; 9];
-        for x in &mut m {
-            *x = d.f64()?;
-        }
-        let hydro = Hydro {
-            force: d.vec3()?,
-            torque: d.vec3()?,
-        };
-        let kappa = d.f64()?;
-        let contact = ContactState {
-            kappa: (!kappa.is_nan()).then_some(kappa),
-            force: d.vec3()?,
-            torque: d.vec3()?,
-            potential: d.f64()?,
-        };
-        let free = FreeMotion {
-            angular_momentum: if d.flag()? { Some(d.vec3()?) } else { None },
-        };
-        let prev = PreviousVelocity {
-            velocity: d.vec3()?,
-            angular_velocity: d.vec3()?,
-        };
-        bodies.push(BodyState {
-            id,
-            name,
-            rigid: RigidState {
-                center,
-                orientation: DQuat::from_array(q),
-                velocity,
-                angular_velocity,
-                volume,
-                centroid,
-                inertia: DMat3::from_cols_array(&m),
-            },
-            hydro,
-            contact,
-            free,
-            prev,
-        });
-    }
-    let nrec = d.len(16)?;
-    let mut state = Vec::with_capacity(nrec);
-    for _ in 0..nrec {
-        let name = d.str()?;
-        let version = d.u32()?;
-        let n = d.len(1)?;
-        state.push(StateRecord {
-            name,
-            version,
-            bytes: d.take(n)?.to_vec(),
-        });
-    }
-    if d.pos != b.len() {
-        return Err(format!(
-            "corrupt data ({} unexpected bytes at the end)",
-            b.len() - d.pos
-        ));
-    }
-    if !bodies.windows(2).all(|w| w[0].id < w[1].id) {
-        return Err("corrupt data (bodies out of order)".into());
-    }
-    Ok(Checkpoint {
-        file: file.to_path_buf(),
-        scene_ron,
-        base_dir,
-        progress,
-        time,
-        sample,
-        omega0: v[7],
-        dt_fallback: v[8],
-        reverse,
-        n: grid_n,
-        omega,
-        u,
-        u_prev,
-        dt_prev,
-        bodies,
-        state,
-    })
+    Ok(&data[start..])
 }
 
 /// The scene text that decides whether two scenes are the same run: everything but the end
