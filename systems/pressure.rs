@@ -29,18 +29,9 @@
 //! keeps the velocity the projection gave it, and the flow's change since then (transport,
 //! diffusion, the velocity solve) acts on the fluid's share. That is the viscous force of a
 //! fluid of dynamic viscosity ρ_P ν on the body. P_e is taken over the region the body
-//! occupied when ũ was made and travels with the body: evaluated instead at the nodes the
-//! body covers one step later (ũ kept as a grid field), the crescent it has moved into gave
-//! the excess mass the velocity of the fluid that was there, a drag that grew with V Δt / h
-//! (sedimentation-2d at h = 1/64: a max fall velocity of 10.13 at Δt = 3e-3 against 11.68 at
-//! Δt = 7.5e-4, now 10.92 against 11.87, the default coupling's Δt dependence). (With the plain mean of u, the
-//! diffusion's ν∆u acted on the whole mass: a sphere of density 2 settled 28% slow; with an
-//! explicit correction (ρ_P/ρ - 1) ν Δt ∆u the error still grew with the density, -9% at 5,
-//! and a body of density 0.01 blew up.) The weight of the body's mass beyond the fluid it
-//! displaces, ∫(ρ_i - ρ_P)χ_i g, is added to that velocity, a force spread over the region
-//! the penalization moves rigidly. (Spread as (ρ - ⟨ρ⟩) g over χ instead, a sphere at Re ≪ 1
-//! settled 11% slow at every density: the part of the rigid band outside χ took the
-//! backflow of the projection into the body.)
+//! occupied when ũ was made and travels with the body. The weight of the body's mass beyond
+//! the fluid it displaces, ∫(ρ_i - ρ_P)χ_i g, is added to that velocity, a force spread over
+//! the region the penalization moves rigidly.
 //!
 //! The hydrostatic part of p is not periodic: p = G·x + p' with G = ⟨ρ_P⟩ g, the mean weight
 //! of the fluid phases, carried by the mean pressure gradient. Only p' is solved for.
@@ -57,21 +48,17 @@
 //! constant-coefficient 5/7-point Laplacian (one real FFT pair, exact when ρ is uniform) where
 //! max β / min β < 5, else by one multigrid V-cycle (`solvers::multigrid`; the hierarchy is
 //! built only for a scene whose fluid phases and moving bodies differ that much in density).
-//! The FFT preconditioner's iterations grow with the contrast, the V-cycle's do not: at 1e-9
-//! (3D, 32³, a sphere) the FFT took 2 at density ratio 1.1, 6 at 2, 11 at 5, 36 at 0.01 and
-//! about 146 at 1000. With multigrid the tank of 100 bodies under a free surface at 1:100 (64³)
-//! takes 7 iterations instead of 100, its pressure system 0.10 s a step instead of 0.42 s, and
-//! the tank with 1 body 3 instead of 20; dkt (density ratio 1.14) stays with the FFT (5
-//! iterations; 7 and twice the time with multigrid). At 1e-7 against 1e-9: dkt (60x60x240) 5
-//! against 7, the tank of 100 bodies with the FFT preconditioner 100 against 137. The quick
-//! tier gives the same numbers at 1e-7 as at 1e-9 to the printed seven digits in 87 of 90 rows,
-//! the other three (floating bodies) within 2e-6 of their value; at 1e-6 a floating box's
-//! draft moved by 6% and the waterline by 0.07 h. (A free surface's right-hand side is mostly
-//! the hydrostatic balance, so the residual relative to it must stay small to resolve the
-//! dynamic part.) The warm start's residual is 0.3 to 1.3 of the right-hand side's (the
-//! penalization's increment changes from step to step); extrapolating φ from the last two
-//! steps did not reduce the iterations (dkt 7 and 7, the tank 137 and 139). Dot products are
-//! summed row by row in a fixed order, so the result does not depend on the thread count.
+//! Dot products are summed row by row in a fixed order, so the result does not depend on the
+//! thread count.
+//!
+//! The step (`pressure`), in named steps: β on the faces (`face_beta`), G (`face_gravity`),
+//! the node part of the source (`node_increment`), its divergence (`divergence`), φ
+//! (`solve_phi`), the projected increment and ũ (`project`), its curl added to ω, and the
+//! bodies' excess momentum (`excess_momentum`).
+//!
+//! The measurements behind these choices (where P_e and the excess weight are taken, the
+//! preconditioners' iterations, the tolerance) are in docs/numerics.md, section "The pressure
+//! projection's measurements".
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
@@ -127,7 +114,29 @@ fn gravity_face(phase: [f64; 2], g: f64, gg: f64) -> f64 {
     0.5 * (phase[0] + phase[1]) * g - gg
 }
 
-/// The pressure system.
+/// The gravity of a step: g, G = ⟨ρ_P⟩ g and Δt, for [`FaceGravity::impulse`].
+#[derive(Debug, Clone, Copy)]
+struct FaceGravity {
+    /// The step's Δt.
+    dt: f64,
+    /// The acceleration of gravity g.
+    g: [f64; 3],
+    /// G = ⟨ρ_P⟩ g, the mean pressure gradient.
+    gg: [f64; 3],
+}
+
+impl FaceGravity {
+    /// Δt (ρ_P g - G)_a on the face between nodes `lo` and `hi = lo + e_a` of phase densities
+    /// `phase` ([`gravity_face`] times Δt).
+    #[inline]
+    fn impulse(&self, a: usize, phase: [f64; 2]) -> f64 {
+        self.dt * gravity_face(phase, self.g[a], self.gg[a])
+    }
+}
+
+/// The pressure system: the projection ∇·(β∇φ) = ∇·(δu_pen + Δt (ρ_P g - G) β - Δt (u·∇)u),
+/// ω ← ω + ∇×(δu_pen + Δt (ρ_P g - G) β - β∇φ) (eqs. 14 and 16), then each dynamic body's
+/// excess momentum P_e = ∫(ρ - ρ_P) w ũ.
 #[allow(clippy::too_many_arguments)]
 pub fn pressure(
     grid: Res<Grid>,
@@ -141,19 +150,32 @@ pub fn pressure(
     mut sums: ResMut<BodySums>,
     bodies: Query<(&Body, &GridPatch, &RigidState)>,
 ) {
-    let state = &mut *state;
+    let (solver, bf, state) = (&mut *solver, &mut *bf, &mut *state);
     let dt = time.dt;
-    let dim = grid.dim;
+    face_beta(&grid, &bf.rho, &mut solver.poisson.beta);
+    let gravity = face_gravity(
+        &grid,
+        &mut solver.poisson,
+        &bf.rho_phase,
+        params.gravity,
+        dt,
+    );
+    node_increment(&grid, &fields.u, &bf.du, dt, &mut solver.src);
+    divergence(&grid, solver, &bf.rho_phase, gravity);
+    solve_phi(&grid, &mut solver.poisson, &mut state.phi, &mut spectral);
+    project(&grid, solver, &state.phi, bf, &fields.u, gravity);
+    curl_add(&grid, &bf.du, fields.omega_mut());
+    let ldt = params.numerics.lambda * dt;
+    excess_momentum(&grid, &bodies, bf, &solver.trial, &mut sums, state, ldt);
+}
+
+/// β on the faces: β_a = 2 / (ρ_lo + ρ_hi) on the face between nodes `lo` and
+/// `hi = lo + e_a`, stored at `lo`.
+fn face_beta(grid: &Grid, rho: &[f64], beta: &mut [Vec<f64>]) {
     let nx = grid.n[0];
-    let h = grid.h;
-    let solver = &mut *solver;
-    let bf = &mut *bf;
-    let rho = &bf.rho;
-    // β on the faces.
-    for a in 0..dim {
-        let beta = &mut solver.poisson.beta[a];
+    for (a, beta) in beta.iter_mut().enumerate().take(grid.dim) {
         beta.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
-            let rn = RowNeighbours::new(&grid, row);
+            let rn = RowNeighbours::new(grid, row);
             let rc = &rho[rn.c0..rn.c0 + nx];
             if a == 0 {
                 for_row(nx, |i, _, ip| o[i] = 2.0 / (rc[i] + rc[ip]));
@@ -165,162 +187,197 @@ pub fn pressure(
             }
         });
     }
-    // G = ⟨ρ_P⟩ g, the mean weight of the fluid phases, carried by the mean pressure
-    // gradient (the bodies' weight beyond the fluid they displace acts on their rigid
-    // velocity, `rigid_velocity`).
-    let phase = &bf.rho_phase;
-    let rho_mean = solver.poisson.mean(nx, phase);
-    let g = params.gravity;
+}
+
+/// G = ⟨ρ_P⟩ g, the mean weight of the fluid phases `phase`, carried by the mean pressure
+/// gradient (the bodies' weight beyond the fluid they displace acts on their rigid velocity,
+/// `rigid_velocity`); with g and Δt, the gravity of the step.
+fn face_gravity(
+    grid: &Grid,
+    poisson: &mut VariablePoisson,
+    phase: &[f64],
+    g: [f64; 3],
+    dt: f64,
+) -> FaceGravity {
+    let rho_mean = poisson.mean(grid.n[0], phase);
     let gg: [f64; 3] = std::array::from_fn(|a| g[a] * rho_mean);
-    // The node part of the increment: δu_pen - Δt (u·∇)u (centred differences).
-    {
-        let u = &fields.u;
-        let du = &bf.du;
-        let inv2h = 0.5 / h;
-        let src = crate::base::grid::component_ptrs(&mut solver.src);
-        let three = dim == 3;
-        (0..grid.len() / nx).into_par_iter().for_each(|row| {
-            let rn = RowNeighbours::new(&grid, row);
-            let (u0, u1) = (line_at(&u[0], rn.c0, nx), line_at(&u[1], rn.c0, nx));
-            let u2 = if three { line_at(&u[2], rn.c0, nx) } else { u0 };
-            for q in 0..dim {
-                // SAFETY: the row belongs to this task only.
-                let out = unsafe { src[q].slice_mut(rn.c0, nx) };
-                let (uq, duq) = (line_at(&u[q], rn.c0, nx), line_at(&du[q], rn.c0, nx));
-                let (ym, yp) = (
-                    line_at(&u[q], rn.below[0], nx),
-                    line_at(&u[q], rn.above[0], nx),
-                );
-                let (zm, zp) = if three {
-                    (
-                        line_at(&u[q], rn.below[1], nx),
-                        line_at(&u[q], rn.above[1], nx),
-                    )
-                } else {
-                    (uq, uq)
-                };
-                for_row(nx, |i, im, ip| {
-                    let mut adv = 0.0;
-                    adv += u0[i] * (uq[ip] - uq[im]) * inv2h;
-                    adv += u1[i] * (yp[i] - ym[i]) * inv2h;
-                    if three {
-                        adv += u2[i] * (zp[i] - zm[i]) * inv2h;
-                    }
-                    out[i] = duq[i] - dt * adv;
-                });
-            }
-        });
-    }
-    // b = ∇·(face field), face field = mean of the two nodes + the gravity term, times h²
-    // (A's scaling): A φ = -h² b.
-    {
-        let (src, beta, phase) = (&solver.src, &solver.poisson.beta, &bf.rho_phase);
-        solver
-            .poisson
-            .rhs
-            .par_chunks_mut(nx)
-            .enumerate()
-            .for_each(|(row, o)| {
-                let rn = RowNeighbours::new(&grid, row);
-                // The face between lo and hi = lo + e_a, from the values at both nodes and β
-                // on it.
-                let face = |a: usize, s: [f64; 2], ph: [f64; 2], b: f64| {
-                    0.5 * (s[0] + s[1]) + dt * gravity_face(ph, g[a], gg[a]) * b
-                };
-                let ph = line_at(phase, rn.c0, nx);
-                let (s0, b0) = (line_at(&src[0], rn.c0, nx), line_at(&beta[0], rn.c0, nx));
-                // Per axis 1 and 2: the source, phase and β rows of this row and of the rows
-                // below and above it.
-                let rows = |a: usize| {
-                    let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
-                    (
-                        [
-                            line_at(&src[a], m, nx),
-                            line_at(&src[a], rn.c0, nx),
-                            line_at(&src[a], p, nx),
-                        ],
-                        [line_at(phase, m, nx), line_at(phase, p, nx)],
-                        [line_at(&beta[a], m, nx), line_at(&beta[a], rn.c0, nx)],
-                    )
-                };
-                let (s1, p1, b1) = rows(1);
-                let (s2, p2, b2) = if dim == 3 { rows(2) } else { (s1, p1, b1) };
-                for_row(nx, |i, im, ip| {
-                    let mut div = 0.0;
-                    div += face(0, [s0[i], s0[ip]], [ph[i], ph[ip]], b0[i])
-                        - face(0, [s0[im], s0[i]], [ph[im], ph[i]], b0[im]);
-                    div += face(1, [s1[1][i], s1[2][i]], [ph[i], p1[1][i]], b1[1][i])
-                        - face(1, [s1[0][i], s1[1][i]], [p1[0][i], ph[i]], b1[0][i]);
-                    if dim == 3 {
-                        div += face(2, [s2[1][i], s2[2][i]], [ph[i], p2[1][i]], b2[1][i])
-                            - face(2, [s2[0][i], s2[1][i]], [p2[0][i], ph[i]], b2[0][i]);
-                    }
-                    o[i] = -h * div;
-                });
+    FaceGravity { dt, g, gg }
+}
+
+/// The node part of the increment, s = δu_pen - Δt (u·∇)u (centred differences), into `src`.
+fn node_increment(grid: &Grid, u: &[Vec<f64>], du: &[Vec<f64>], dt: f64, src: &mut [Vec<f64>]) {
+    let (dim, nx) = (grid.dim, grid.n[0]);
+    let inv2h = 0.5 / grid.h;
+    let src = crate::base::grid::component_ptrs(src);
+    let three = dim == 3;
+    (0..grid.len() / nx).into_par_iter().for_each(|row| {
+        let rn = RowNeighbours::new(grid, row);
+        let (u0, u1) = (line_at(&u[0], rn.c0, nx), line_at(&u[1], rn.c0, nx));
+        let u2 = if three { line_at(&u[2], rn.c0, nx) } else { u0 };
+        for q in 0..dim {
+            // SAFETY: the row belongs to this task only.
+            let out = unsafe { src[q].slice_mut(rn.c0, nx) };
+            let (uq, duq) = (line_at(&u[q], rn.c0, nx), line_at(&du[q], rn.c0, nx));
+            let (ym, yp) = (
+                line_at(&u[q], rn.below[0], nx),
+                line_at(&u[q], rn.above[0], nx),
+            );
+            let (zm, zp) = if three {
+                (
+                    line_at(&u[q], rn.below[1], nx),
+                    line_at(&u[q], rn.above[1], nx),
+                )
+            } else {
+                (uq, uq)
+            };
+            for_row(nx, |i, im, ip| {
+                let mut adv = 0.0;
+                adv += u0[i] * (uq[ip] - uq[im]) * inv2h;
+                adv += u1[i] * (yp[i] - ym[i]) * inv2h;
+                if three {
+                    adv += u2[i] * (zp[i] - zm[i]) * inv2h;
+                }
+                out[i] = duq[i] - dt * adv;
             });
-    }
-    let with = solver.poisson.choose();
-    let (it, res) = solver
+        }
+    });
+}
+
+/// The right-hand side, b = ∇·(s̄ + Δt (ρ_P g - G) β) with s̄ the face mean of the two nodes'
+/// `src`, times h² (A's scaling): A φ = -h² b, into the solver's `rhs`.
+fn divergence(grid: &Grid, solver: &mut PressureSolver, phase: &[f64], gravity: FaceGravity) {
+    let (dim, nx, h) = (grid.dim, grid.n[0], grid.h);
+    let (src, beta) = (&solver.src, &solver.poisson.beta);
+    solver
         .poisson
-        .solve(&grid, &mut state.phi, &mut spectral, with, TOLERANCE);
+        .rhs
+        .par_chunks_mut(nx)
+        .enumerate()
+        .for_each(|(row, o)| {
+            let rn = RowNeighbours::new(grid, row);
+            // The face between lo and hi = lo + e_a, from the values at both nodes and β
+            // on it.
+            let face = |a: usize, s: [f64; 2], ph: [f64; 2], b: f64| {
+                0.5 * (s[0] + s[1]) + gravity.impulse(a, ph) * b
+            };
+            let ph = line_at(phase, rn.c0, nx);
+            let (s0, b0) = (line_at(&src[0], rn.c0, nx), line_at(&beta[0], rn.c0, nx));
+            // Per axis 1 and 2: the source, phase and β rows of this row and of the rows
+            // below and above it.
+            let rows = |a: usize| {
+                let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
+                (
+                    [
+                        line_at(&src[a], m, nx),
+                        line_at(&src[a], rn.c0, nx),
+                        line_at(&src[a], p, nx),
+                    ],
+                    [line_at(phase, m, nx), line_at(phase, p, nx)],
+                    [line_at(&beta[a], m, nx), line_at(&beta[a], rn.c0, nx)],
+                )
+            };
+            let (s1, p1, b1) = rows(1);
+            let (s2, p2, b2) = if dim == 3 { rows(2) } else { (s1, p1, b1) };
+            for_row(nx, |i, im, ip| {
+                let mut div = 0.0;
+                div += face(0, [s0[i], s0[ip]], [ph[i], ph[ip]], b0[i])
+                    - face(0, [s0[im], s0[i]], [ph[im], ph[i]], b0[im]);
+                div += face(1, [s1[1][i], s1[2][i]], [ph[i], p1[1][i]], b1[1][i])
+                    - face(1, [s1[0][i], s1[1][i]], [p1[0][i], ph[i]], b1[0][i]);
+                if dim == 3 {
+                    div += face(2, [s2[1][i], s2[2][i]], [ph[i], p2[1][i]], b2[1][i])
+                        - face(2, [s2[0][i], s2[1][i]], [p2[0][i], ph[i]], b2[0][i]);
+                }
+                o[i] = -h * div;
+            });
+        });
+}
+
+/// φ = Δt p' from -∇·(β∇φ) = -b (conjugate gradients to [`TOLERANCE`], warm-started from
+/// the last step's `phi`, preconditioned as [`VariablePoisson::choose`] says); warns when it
+/// stops at [`MAX_ITERATIONS`].
+fn solve_phi(grid: &Grid, poisson: &mut VariablePoisson, phi: &mut [f64], spectral: &mut Spectral) {
+    let with = poisson.choose();
+    let (it, res) = poisson.solve(grid, phi, spectral, with, TOLERANCE);
     if it >= MAX_ITERATIONS {
         tracing::warn!(
             "pressure solve: relative residual {res:.2e} after {it} iterations (asked {TOLERANCE:.0e})"
         );
     }
-    // δ = δu_pen + face-to-node mean of Δt (ρ_P g - G) β - β ∇φ (the advection is not part
-    // of it: transport makes it); then ω += ∇×δ.
-    {
-        let (phi, beta) = (&state.phi, &solver.poisson.beta);
-        let phase = &bf.rho_phase;
-        let u = &fields.u;
-        let trial = crate::base::grid::component_ptrs(&mut solver.trial);
-        let du = crate::base::grid::component_ptrs(&mut bf.du);
-        let inv_h = 1.0 / h;
-        (0..grid.len() / nx).into_par_iter().for_each(|row| {
-            let rn = RowNeighbours::new(&grid, row);
-            // The face between lo and hi = lo + e_a, from the phase density and φ at both
-            // nodes and β on it.
-            let face = |a: usize, ph: [f64; 2], f: [f64; 2], b: f64| {
-                (dt * gravity_face(ph, g[a], gg[a]) - (f[1] - f[0]) * inv_h) * b
+}
+
+/// The projected increment δ = δu_pen + c, c the face-to-node mean of Δt (ρ_P g - G) β - β∇φ
+/// (the advection is not part of it: transport makes it): c is added to the bodies' `du`
+/// (which holds δu_pen), and ũ = u + c written to the solver's `trial`.
+fn project(
+    grid: &Grid,
+    solver: &mut PressureSolver,
+    phi: &[f64],
+    bf: &mut BodyFields,
+    u: &[Vec<f64>],
+    gravity: FaceGravity,
+) {
+    let (dim, nx) = (grid.dim, grid.n[0]);
+    let beta = &solver.poisson.beta;
+    let phase = &bf.rho_phase;
+    let trial = crate::base::grid::component_ptrs(&mut solver.trial);
+    let du = crate::base::grid::component_ptrs(&mut bf.du);
+    let inv_h = 1.0 / grid.h;
+    (0..grid.len() / nx).into_par_iter().for_each(|row| {
+        let rn = RowNeighbours::new(grid, row);
+        // The face between lo and hi = lo + e_a, from the phase density and φ at both
+        // nodes and β on it.
+        let face = |a: usize, ph: [f64; 2], f: [f64; 2], b: f64| {
+            (gravity.impulse(a, ph) - (f[1] - f[0]) * inv_h) * b
+        };
+        let (ph, fc) = (line_at(phase, rn.c0, nx), line_at(phi, rn.c0, nx));
+        for a in 0..dim {
+            let (ua, bc) = (line_at(&u[a], rn.c0, nx), line_at(&beta[a], rn.c0, nx));
+            // SAFETY: the row belongs to this task only.
+            let (du_a, tr_a) =
+                unsafe { (du[a].slice_mut(rn.c0, nx), trial[a].slice_mut(rn.c0, nx)) };
+            let mut out = |i: usize, corr: f64| {
+                du_a[i] += corr;
+                tr_a[i] = ua[i] + corr;
             };
-            let (ph, fc) = (line_at(phase, rn.c0, nx), line_at(phi, rn.c0, nx));
-            for a in 0..dim {
-                let (ua, bc) = (line_at(&u[a], rn.c0, nx), line_at(&beta[a], rn.c0, nx));
-                // SAFETY: the row belongs to this task only.
-                let (du_a, tr_a) =
-                    unsafe { (du[a].slice_mut(rn.c0, nx), trial[a].slice_mut(rn.c0, nx)) };
-                let mut out = |i: usize, corr: f64| {
-                    du_a[i] += corr;
-                    tr_a[i] = ua[i] + corr;
-                };
-                if a == 0 {
-                    for_row(nx, |i, im, ip| {
-                        let corr = 0.5
-                            * (face(0, [ph[im], ph[i]], [fc[im], fc[i]], bc[im])
-                                + face(0, [ph[i], ph[ip]], [fc[i], fc[ip]], bc[i]));
-                        out(i, corr);
-                    });
-                } else {
-                    let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
-                    let (phm, php) = (line_at(phase, m, nx), line_at(phase, p, nx));
-                    let (fm, fp) = (line_at(phi, m, nx), line_at(phi, p, nx));
-                    let bm = line_at(&beta[a], m, nx);
-                    for i in 0..nx {
-                        let corr = 0.5
-                            * (face(a, [phm[i], ph[i]], [fm[i], fc[i]], bm[i])
-                                + face(a, [ph[i], php[i]], [fc[i], fp[i]], bc[i]));
-                        out(i, corr);
-                    }
+            if a == 0 {
+                for_row(nx, |i, im, ip| {
+                    let corr = 0.5
+                        * (face(0, [ph[im], ph[i]], [fc[im], fc[i]], bc[im])
+                            + face(0, [ph[i], ph[ip]], [fc[i], fc[ip]], bc[i]));
+                    out(i, corr);
+                });
+            } else {
+                let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
+                let (phm, php) = (line_at(phase, m, nx), line_at(phase, p, nx));
+                let (fm, fp) = (line_at(phi, m, nx), line_at(phi, p, nx));
+                let bm = line_at(&beta[a], m, nx);
+                for i in 0..nx {
+                    let corr = 0.5
+                        * (face(a, [phm[i], ph[i]], [fm[i], fc[i]], bm[i])
+                            + face(a, [ph[i], php[i]], [fc[i], fp[i]], bc[i]));
+                    out(i, corr);
                 }
             }
-        });
-    }
-    curl_add(&grid, &bf.du, fields.omega_mut());
-    // The momentum of each dynamic body's excess mass, taken over the region its
-    // penalization moved this step: the body carries it to the next step's rigid velocity.
-    let ldt = params.numerics.lambda * dt;
-    for (body, patch, st) in &bodies {
+        }
+    });
+}
+
+/// The momentum of each dynamic body's excess mass per unit of that mass,
+/// P_e / ∫(ρ - ρ_P) w = ∫(ρ - ρ_P) w ũ / ∫(ρ - ρ_P) w (and the same for the angular
+/// momentum), split by the sign of ρ - ρ_P and taken over the region its penalization moved
+/// this step (weight w from `ldt` = λΔt): the body carries it to the next step's rigid
+/// velocity, in `state.excess`.
+fn excess_momentum(
+    grid: &Grid,
+    bodies: &Query<(&Body, &GridPatch, &RigidState)>,
+    bf: &BodyFields,
+    trial: &[Vec<f64>],
+    sums: &mut BodySums,
+    state: &mut PressureState,
+    ldt: f64,
+) {
+    for (body, patch, st) in bodies {
         if !body.is_dynamic() {
             continue;
         }
@@ -329,17 +386,10 @@ pub fn pressure(
         }
         let (rho, phase) = (&bf.rho, &bf.rho_phase);
         // Both signs of ρ - ρ_P in one pass over the patch.
-        let sides = integrate_n::<2>(
-            &grid,
-            patch,
-            st.center,
-            &solver.trial,
-            &mut sums,
-            |c, _, g| {
-                let w = penalized_weight(ldt, c);
-                [1.0, -1.0].map(|sign: f64| (sign * (rho[g] - phase[g])).max(0.0) * w)
-            },
-        );
+        let sides = integrate_n::<2>(grid, patch, st.center, trial, sums, |c, _, g| {
+            let w = penalized_weight(ldt, c);
+            [1.0, -1.0].map(|sign: f64| (sign * (rho[g] - phase[g])).max(0.0) * w)
+        });
         state.excess[body.id] = Some(sides.map(|(m, _, p, l, _)| {
             if m != 0.0 {
                 ExcessMomentum {
