@@ -140,8 +140,35 @@ impl Canvas {
 /// The PNG bytes of the slice image of `input`; an error if a field has not one value per
 /// node or the text cannot be drawn.
 pub fn render(input: &SliceInput) -> Result<Vec<u8>> {
-    let g = input.grid;
-    let n = g.len();
+    check_lengths(input)?;
+    let nodes = SliceNodes::new(input);
+    let (w, h) = slice_size(input.grid);
+    let mut cv = Canvas {
+        w,
+        h,
+        buf: vec![255; 3 * w as usize * h as usize],
+    };
+    let scale = colour_scale(input, &nodes);
+    paint_nodes(&mut cv, input, &nodes, scale);
+    draw_zero_levels(&mut cv, input, &nodes);
+    let bar = ColourBar::new(&nodes, h);
+    bar.paint(&mut cv);
+    draw_text(&mut cv, input, &bar, scale)?;
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &cv.buf,
+        w,
+        h,
+        image::ColorType::Rgb8,
+    )
+    .context("cannot encode the slice image")?;
+    Ok(png)
+}
+
+/// An error if a field of `input` has not one value per node, or the grid has none.
+fn check_lengths(input: &SliceInput) -> Result<()> {
+    let n = input.grid.len();
     let check = |name: &str, f: Option<&[f64]>| match f {
         Some(f) if f.len() != n => Err(anyhow!(
             "the slice's {name} has {} values, the grid {n} nodes",
@@ -153,29 +180,52 @@ pub fn render(input: &SliceInput) -> Result<Vec<u8>> {
     check("free surface", input.liquid)?;
     check("bodies", input.bodies)?;
     anyhow::ensure!(n > 0, "the grid has no node");
-    let [nx, nv] = slice_dims(g);
-    let j = if g.dim == 3 { input.j % g.n[1] } else { 0 };
-    // Node (i, k) of the slice: x index i, vertical index k.
-    let node = |i: usize, k: usize| {
-        if g.dim == 3 {
-            g.idx(i % nx, j, k % nv)
-        } else {
-            g.idx(i % nx, k % nv, 0)
+    Ok(())
+}
+
+/// The nodes of a slice: `nx` along x by `nv` up, each a block of `s` × `s` pixels.
+struct SliceNodes<'a> {
+    grid: &'a Grid,
+    nx: usize,
+    nv: usize,
+    /// In 3D, the y index of the plane.
+    j: usize,
+    /// Pixels per node along each axis.
+    s: u32,
+}
+
+impl<'a> SliceNodes<'a> {
+    /// The nodes of the slice `input` shows.
+    fn new(input: &SliceInput<'a>) -> Self {
+        let g = input.grid;
+        let [nx, nv] = slice_dims(g);
+        SliceNodes {
+            grid: g,
+            nx,
+            nv,
+            j: if g.dim == 3 { input.j % g.n[1] } else { 0 },
+            s: pixels_per_cell(g),
         }
-    };
-    let s = pixels_per_cell(g);
-    let (w, h) = slice_size(g);
-    let mut cv = Canvas {
-        w,
-        h,
-        buf: vec![255; 3 * w as usize * h as usize],
-    };
-    // The colour scale: the 99th percentile of |value| over the slice's nodes outside the
-    // bodies (a thin peak at a wall would wash out the wake), else their largest |value|.
+    }
+
+    /// Node (i, k) of the slice: x index i, vertical index k.
+    fn node(&self, i: usize, k: usize) -> usize {
+        if self.grid.dim == 3 {
+            self.grid.idx(i % self.nx, self.j, k % self.nv)
+        } else {
+            self.grid.idx(i % self.nx, k % self.nv, 0)
+        }
+    }
+}
+
+/// The colour scale: the 99th percentile of |value| over the slice's nodes outside the
+/// bodies (a thin peak at a wall would wash out the wake), else their largest |value|.
+fn colour_scale(input: &SliceInput, nodes: &SliceNodes) -> f64 {
+    let (nx, nv) = (nodes.nx, nodes.nv);
     let mut mags: Vec<f64> = Vec::with_capacity(nx * nv);
     for k in 0..nv {
         for i in 0..nx {
-            let id = node(i, k);
+            let id = nodes.node(i, k);
             let v = input.colour[id];
             if v.is_finite() && !input.bodies.is_some_and(|b| b[id] > 0.0) {
                 mags.push(v.abs());
@@ -191,12 +241,19 @@ pub fn render(input: &SliceInput) -> Result<Vec<u8>> {
             scale = *p;
         }
     }
+    scale
+}
+
+/// Paint each node's block in its colour on the scale `scale` (shaded grey inside the
+/// bodies).
+fn paint_nodes(cv: &mut Canvas, input: &SliceInput, nodes: &SliceNodes, scale: f64) {
     let unit = if scale > 0.0 { scale } else { 1.0 };
+    let (nx, nv, s) = (nodes.nx, nodes.nv, nodes.s);
     let top = TITLE_BAND as i64;
     let y_of = |k: usize| top + ((nv - 1 - k) as u32 * s) as i64;
     for k in 0..nv {
         for i in 0..nx {
-            let id = node(i, k);
+            let id = nodes.node(i, k);
             let mut c = colour_map(input.colour[id] / unit);
             if input.bodies.is_some_and(|b| b[id] > 0.0) {
                 c = c.map(|x| ((x as u32 + 90) / 2) as u8);
@@ -208,7 +265,12 @@ pub fn render(input: &SliceInput) -> Result<Vec<u8>> {
             }
         }
     }
-    // The zero levels: lattice point (a, b) is at the centre of node (a, b)'s block.
+}
+
+/// The zero levels of the bodies (green) and the free surface (black): lattice point (a, b)
+/// is at the centre of node (a, b)'s block.
+fn draw_zero_levels(cv: &mut Canvas, input: &SliceInput, nodes: &SliceNodes) {
+    let (nx, nv, s) = (nodes.nx, nodes.nv, nodes.s);
     let sf = s as f64;
     let clip = [
         0.0,
@@ -224,7 +286,7 @@ pub fn render(input: &SliceInput) -> Result<Vec<u8>> {
     };
     for (field, c) in [(input.bodies, [0, 140, 0]), (input.liquid, [0, 0, 0])] {
         let Some(f) = field else { continue };
-        let (points, segments) = contour(nx, nv, |i, k| f[node(i, k)]);
+        let (points, segments) = contour(nx, nv, |i, k| f[nodes.node(i, k)]);
         for [p, q] in segments {
             cv.line(
                 to_px(points[p as usize]),
@@ -234,54 +296,68 @@ pub fn render(input: &SliceInput) -> Result<Vec<u8>> {
             );
         }
     }
-    // The colour bar.
-    let bar_x = (nx as u32 * s + 16) as i64;
-    let (bar_top, bar_bottom) = (top + 16, top + (h - TITLE_BAND) as i64 - 16);
-    let span = (bar_bottom - bar_top).max(1);
-    for y in bar_top..=bar_bottom {
-        let t = 1.0 - 2.0 * (y - bar_top) as f64 / span as f64;
-        for x in bar_x..bar_x + 16 {
-            cv.set(x, y, colour_map(t));
+}
+
+/// Where the colour bar is, pixels: its left edge, top and bottom.
+struct ColourBar {
+    x: i64,
+    top: i64,
+    bottom: i64,
+}
+
+impl ColourBar {
+    /// The colour bar right of the slice of `nodes`, in an image `h` pixels high.
+    fn new(nodes: &SliceNodes, h: u32) -> Self {
+        let top = TITLE_BAND as i64;
+        ColourBar {
+            x: (nodes.nx as u32 * nodes.s + 16) as i64,
+            top: top + 16,
+            bottom: top + (h - TITLE_BAND) as i64 - 16,
         }
     }
+
+    /// Paint the bar, 16 pixels wide, from +1 at the top to -1 at the bottom.
+    fn paint(&self, cv: &mut Canvas) {
+        let span = (self.bottom - self.top).max(1);
+        for y in self.top..=self.bottom {
+            let t = 1.0 - 2.0 * (y - self.top) as f64 / span as f64;
+            for x in self.x..self.x + 16 {
+                cv.set(x, y, colour_map(t));
+            }
+        }
+    }
+}
+
+/// The title, the legend and the colour bar's labels (its ends at ±`scale`).
+fn draw_text(cv: &mut Canvas, input: &SliceInput, bar: &ColourBar, scale: f64) -> Result<()> {
     register_bundled_font()?;
-    {
-        let root = BitMapBackend::with_buffer(&mut cv.buf, (w, h)).into_drawing_area();
-        let err = |e: DrawingAreaErrorKind<_>| anyhow!("cannot draw the slice's text: {e}");
-        let big = TextStyle::from((FAMILY, 16).into_font()).color(&BLACK);
-        let small = TextStyle::from((FAMILY, 12).into_font()).color(&BLACK);
-        root.draw_text(input.title, &big, (6, 4)).map_err(err)?;
-        let mut legend = format!("colour: {} (normal to the slice)", input.colour_name);
-        if input.liquid.is_some() {
-            legend.push_str("; black: free surface");
-        }
-        if input.bodies.is_some() {
-            legend.push_str("; green: bodies (grey inside)");
-        }
-        root.draw_text(&legend, &small, (6, 25)).map_err(err)?;
-        let lx = (bar_x + 20) as i32;
-        let mid = ((bar_top + bar_bottom) / 2) as i32;
-        for (text, y) in [
-            (format!("+{scale:.3e}"), bar_top as i32 - 6),
-            ("0".to_string(), mid - 6),
-            (format!("-{scale:.3e}"), bar_bottom as i32 - 6),
-        ] {
-            root.draw_text(&text, &small, (lx, y)).map_err(err)?;
-        }
-        root.draw_text(input.colour_name, &small, (bar_x as i32, top as i32))
-            .map_err(err)?;
-        root.present().map_err(err)?;
+    let top = TITLE_BAND as i64;
+    let root = BitMapBackend::with_buffer(&mut cv.buf, (cv.w, cv.h)).into_drawing_area();
+    let err = |e: DrawingAreaErrorKind<_>| anyhow!("cannot draw the slice's text: {e}");
+    let big = TextStyle::from((FAMILY, 16).into_font()).color(&BLACK);
+    let small = TextStyle::from((FAMILY, 12).into_font()).color(&BLACK);
+    root.draw_text(input.title, &big, (6, 4)).map_err(err)?;
+    let mut legend = format!("colour: {} (normal to the slice)", input.colour_name);
+    if input.liquid.is_some() {
+        legend.push_str("; black: free surface");
     }
-    let mut png = Vec::new();
-    image::ImageEncoder::write_image(
-        image::codecs::png::PngEncoder::new(&mut png),
-        &cv.buf,
-        w,
-        h,
-        image::ColorType::Rgb8,
-    )
-    .context("cannot encode the slice image")?;
-    Ok(png)
+    if input.bodies.is_some() {
+        legend.push_str("; green: bodies (grey inside)");
+    }
+    root.draw_text(&legend, &small, (6, 25)).map_err(err)?;
+    let lx = (bar.x + 20) as i32;
+    let mid = ((bar.top + bar.bottom) / 2) as i32;
+    for (text, y) in [
+        (format!("+{scale:.3e}"), bar.top as i32 - 6),
+        ("0".to_string(), mid - 6),
+        (format!("-{scale:.3e}"), bar.bottom as i32 - 6),
+    ] {
+        root.draw_text(&text, &small, (lx, y)).map_err(err)?;
+    }
+    root.draw_text(input.colour_name, &small, (bar.x as i32, top as i32))
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
 }
 
 /// Whether the snapshots of `sim`'s run hold slice images: it has a free surface (a

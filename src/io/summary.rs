@@ -181,9 +181,23 @@ pub fn kappa_in_use(scene: &ValidScene) -> String {
 
 /// The summary `tumble check` prints, one line per topic.
 pub fn describe(scene: &ValidScene) -> String {
-    let g = scene.grid();
-    let cells = g.len();
     let mut s = String::new();
+    grid_lines(&mut s, scene);
+    medium_line(&mut s, scene);
+    free_surface_line(&mut s, scene);
+    time_step_line(&mut s, scene);
+    dissipation_line(&mut s, scene);
+    initial_vorticity_line(&mut s, scene);
+    bodies_lines(&mut s, scene);
+    output_lines(&mut s, scene);
+    checkpoints_line(&mut s, scene);
+    warnings_lines(&mut s, scene);
+    s
+}
+
+/// The scene's name and grid, its box, and the estimated memory and time per step.
+fn grid_lines(s: &mut String, scene: &ValidScene) {
+    let g = scene.grid();
     let dims: Vec<String> = g.n[..g.dim].iter().map(|n| n.to_string()).collect();
     let _ = writeln!(
         s,
@@ -191,7 +205,7 @@ pub fn describe(scene: &ValidScene) -> String {
         scene.name,
         g.dim,
         dims.join("x"),
-        grouped(cells),
+        grouped(g.len()),
         g.h
     );
     let _ = writeln!(
@@ -205,12 +219,17 @@ pub fn describe(scene: &ValidScene) -> String {
         "  {}",
         crate::io::estimate::words(&crate::io::estimate::estimate(scene))
     );
+}
+
+/// Vacuum, or the fluid's density and viscosity; and gravity.
+fn medium_line(s: &mut String, scene: &ValidScene) {
+    let dim = scene.grid().dim;
     let f = &scene.fluid;
     if scene.vacuum {
         let _ = writeln!(
             s,
             "  vacuum: no flow; gravity {} and contact act on the bodies directly",
-            vector(&scene.gravity()[..g.dim])
+            vector(&scene.gravity()[..dim])
         );
     } else {
         let _ = writeln!(
@@ -218,32 +237,42 @@ pub fn describe(scene: &ValidScene) -> String {
             "  fluid: density {}, kinematic viscosity {}, gravity {}",
             f.density,
             f.viscosity,
-            vector(&scene.gravity()[..g.dim])
+            vector(&scene.gravity()[..dim])
         );
     }
-    if let Some(fs) = &scene.free_surface {
-        let regions: Vec<String> = fs
-            .liquid
-            .iter()
-            .map(|r| match r {
-                crate::scene::format::LiquidRegion::Below { height, .. } => {
-                    format!("a pool below {}", sig4(*height))
-                }
-                crate::scene::format::LiquidRegion::Above { height, .. } => {
-                    format!("a layer above {}", sig4(*height))
-                }
-                crate::scene::format::LiquidRegion::Shape { .. } => "a shape".to_string(),
-            })
-            .collect();
-        let _ = writeln!(
-            s,
-            "  free surface: liquid of density {} (the fluid's), gas of density {} (ratio 1:{}), liquid at t = 0: {}; an adaptive time step is also at most c (h/|g|)^(1/2)",
-            f.density,
-            fs.gas_density,
-            sig4(f.density / fs.gas_density),
-            regions.join(", ")
-        );
-    }
+}
+
+/// The free surface's liquid and gas and where the liquid starts, if the scene has one.
+fn free_surface_line(s: &mut String, scene: &ValidScene) {
+    let Some(fs) = &scene.free_surface else {
+        return;
+    };
+    let f = &scene.fluid;
+    let regions: Vec<String> = fs
+        .liquid
+        .iter()
+        .map(|r| match r {
+            crate::scene::format::LiquidRegion::Below { height, .. } => {
+                format!("a pool below {}", sig4(*height))
+            }
+            crate::scene::format::LiquidRegion::Above { height, .. } => {
+                format!("a layer above {}", sig4(*height))
+            }
+            crate::scene::format::LiquidRegion::Shape { .. } => "a shape".to_string(),
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "  free surface: liquid of density {} (the fluid's), gas of density {} (ratio 1:{}), liquid at t = 0: {}; an adaptive time step is also at most c (h/|g|)^(1/2)",
+        f.density,
+        fs.gas_density,
+        sig4(f.density / fs.gas_density),
+        regions.join(", ")
+    );
+}
+
+/// The time step policy and the end time.
+fn time_step_line(s: &mut String, scene: &ValidScene) {
     let _ = writeln!(
         s,
         "  time step: {}; end time {}",
@@ -257,6 +286,10 @@ pub fn describe(scene: &ValidScene) -> String {
         ),
         scene.numerics.end_time
     );
+}
+
+/// The grid-scale dissipation of a 3D flow.
+fn dissipation_line(s: &mut String, scene: &ValidScene) {
     if scene.dim() == 3 && !scene.vacuum {
         use crate::systems::diffusion::{ORDER, SMAGORINSKY};
         let _ = writeln!(
@@ -265,6 +298,10 @@ pub fn describe(scene: &ValidScene) -> String {
             2 * ORDER
         );
     }
+}
+
+/// The initial vorticity counted by kind (none in a vacuum).
+fn initial_vorticity_line(s: &mut String, scene: &ValidScene) {
     if !scene.initial.is_empty() {
         let mut kinds: BTreeMap<String, usize> = BTreeMap::new();
         for i in &scene.initial {
@@ -277,27 +314,40 @@ pub fn describe(scene: &ValidScene) -> String {
     } else if !scene.vacuum {
         let _ = writeln!(s, "  initial vorticity: none (fluid at rest)");
     }
-    // Bodies counted by shape and by density, then grouped by kind, shape and density (a
-    // density range when there are too many values to list).
-    let resolved = &scene.resolved().densities;
-    let density_of = |i: usize| match scene.bodies[i].kind {
-        BodyKind::Dynamic => Some(resolved[i]),
+}
+
+/// The density of body `i` if it is dynamic (the resolved one: its own or the fluid's).
+fn dynamic_density(scene: &ValidScene, i: usize) -> Option<f64> {
+    match scene.bodies[i].kind {
+        BodyKind::Dynamic => Some(scene.resolved().densities[i]),
         _ => None,
-    };
+    }
+}
+
+/// The dynamic bodies counted by density (keyed by the density's bits).
+fn density_counts(scene: &ValidScene) -> BTreeMap<u64, usize> {
     let mut densities: BTreeMap<u64, usize> = BTreeMap::new();
-    for d in (0..scene.bodies.len()).filter_map(density_of) {
+    for d in (0..scene.bodies.len()).filter_map(|i| dynamic_density(scene, i)) {
         *densities.entry(d.to_bits()).or_default() += 1;
     }
-    let many = densities.len() > MAX_LISTED_DENSITIES;
-    // (kind, shape, density when listed) -> (count, least and greatest density).
-    let mut groups: BTreeMap<(&str, &str, String), (usize, f64, f64)> = BTreeMap::new();
+    densities
+}
+
+/// Bodies alike by kind, shape and density: (kind, shape, density label) to (count, least
+/// and greatest density). The label is empty when `many` densities are not listed.
+type BodyGroups<'a> = BTreeMap<(&'static str, &'a str, String), (usize, f64, f64)>;
+
+/// The bodies grouped by kind, shape and density (the density in the label only when not
+/// `many`).
+fn body_groups(scene: &ValidScene, many: bool) -> BodyGroups<'_> {
+    let mut groups: BodyGroups = BTreeMap::new();
     for (i, b) in scene.bodies.iter().enumerate() {
         let kind = match &b.kind {
             BodyKind::Dynamic => "dynamic",
             BodyKind::Static => "static",
             BodyKind::Kinematic { .. } => "kinematic",
         };
-        let d = density_of(i);
+        let d = dynamic_density(scene, i);
         let label = match (d, b.density) {
             (Some(d), Some(_)) if !many => format!("density {d}"),
             (Some(d), None) if !many => format!("density {d} (the fluid's)"),
@@ -314,66 +364,89 @@ pub fn describe(scene: &ValidScene) -> String {
             g.2 = g.2.max(d);
         }
     }
+    groups
+}
+
+/// Bodies counted by shape and by density, then grouped by kind, shape and density (a
+/// density range when there are too many values to list); then the contact.
+fn bodies_lines(s: &mut String, scene: &ValidScene) {
     if scene.bodies.is_empty() {
         let _ = writeln!(s, "  bodies: none");
-    } else {
-        let mut shapes: BTreeMap<&str, usize> = BTreeMap::new();
-        for b in &scene.bodies {
-            *shapes.entry(b.shape.name()).or_default() += 1;
-        }
-        let mut shapes: Vec<(&str, usize)> = shapes.into_iter().collect();
-        shapes.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
-        let shapes: Vec<String> = shapes.iter().map(|(k, n)| format!("{k} {n}")).collect();
-        let mut line = format!("  bodies: {} ({})", scene.bodies.len(), shapes.join(", "));
-        if many {
-            let lo = densities
-                .keys()
-                .map(|&d| f64::from_bits(d))
-                .fold(f64::INFINITY, f64::min);
-            let hi = densities
-                .keys()
-                .map(|&d| f64::from_bits(d))
-                .fold(f64::NEG_INFINITY, f64::max);
-            let _ = write!(
-                line,
-                "; densities: {} values from {} to {}",
-                densities.len(),
-                sig4(lo),
-                sig4(hi)
-            );
-        } else if !densities.is_empty() {
-            let list: Vec<String> = densities
-                .iter()
-                .map(|(&d, n)| format!("{} x {n}", f64::from_bits(d)))
-                .collect();
-            let _ = write!(line, "; densities: {}", list.join(", "));
-        }
-        let _ = writeln!(s, "{line}");
-        for ((kind, shape, label), (n, lo, hi)) in &groups {
-            let density = if !label.is_empty() || !lo.is_finite() {
-                label.clone()
-            } else if lo == hi {
-                format!("density {}", sig4(*lo))
-            } else {
-                format!("densities {} to {}", sig4(*lo), sig4(*hi))
-            };
-            let sep = if density.is_empty() { "" } else { ", " };
-            let _ = writeln!(s, "    {n} {kind} {shape}{sep}{density}");
-        }
-        let c = &scene.contact;
-        let eps = scene.resolved().contact.eps;
-        let eps = match c.eps {
-            Some(_) => eps.to_string(),
-            None => format!("h = {eps}"),
-        };
-        let _ = writeln!(
-            s,
-            "  contact: kappa {}, range eps = {eps}, cut off at {} eps",
-            kappa_in_use(scene),
-            c.range
-        );
+        return;
     }
-    // Outputs.
+    let densities = density_counts(scene);
+    let many = densities.len() > MAX_LISTED_DENSITIES;
+    let _ = writeln!(s, "{}", bodies_count_line(scene, &densities, many));
+    for ((kind, shape, label), (n, lo, hi)) in &body_groups(scene, many) {
+        let density = if !label.is_empty() || !lo.is_finite() {
+            label.clone()
+        } else if lo == hi {
+            format!("density {}", sig4(*lo))
+        } else {
+            format!("densities {} to {}", sig4(*lo), sig4(*hi))
+        };
+        let sep = if density.is_empty() { "" } else { ", " };
+        let _ = writeln!(s, "    {n} {kind} {shape}{sep}{density}");
+    }
+    contact_line(s, scene);
+}
+
+/// The bodies counted by shape (most first), and by density (a range when `many`).
+fn bodies_count_line(scene: &ValidScene, densities: &BTreeMap<u64, usize>, many: bool) -> String {
+    let mut shapes: BTreeMap<&str, usize> = BTreeMap::new();
+    for b in &scene.bodies {
+        *shapes.entry(b.shape.name()).or_default() += 1;
+    }
+    let mut shapes: Vec<(&str, usize)> = shapes.into_iter().collect();
+    shapes.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+    let shapes: Vec<String> = shapes.iter().map(|(k, n)| format!("{k} {n}")).collect();
+    let mut line = format!("  bodies: {} ({})", scene.bodies.len(), shapes.join(", "));
+    if many {
+        let lo = densities
+            .keys()
+            .map(|&d| f64::from_bits(d))
+            .fold(f64::INFINITY, f64::min);
+        let hi = densities
+            .keys()
+            .map(|&d| f64::from_bits(d))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let _ = write!(
+            line,
+            "; densities: {} values from {} to {}",
+            densities.len(),
+            sig4(lo),
+            sig4(hi)
+        );
+    } else if !densities.is_empty() {
+        let list: Vec<String> = densities
+            .iter()
+            .map(|(&d, n)| format!("{} x {n}", f64::from_bits(d)))
+            .collect();
+        let _ = write!(line, "; densities: {}", list.join(", "));
+    }
+    line
+}
+
+/// The contact strength in use and the contact range.
+fn contact_line(s: &mut String, scene: &ValidScene) {
+    let c = &scene.contact;
+    let eps = scene.resolved().contact.eps;
+    let eps = match c.eps {
+        Some(_) => eps.to_string(),
+        None => format!("h = {eps}"),
+    };
+    let _ = writeln!(
+        s,
+        "  contact: kappa {}, range eps = {eps}, cut off at {} eps",
+        kappa_in_use(scene),
+        c.range
+    );
+}
+
+/// The field snapshots (how many, of what, in which formats, about how large) and the body
+/// surfaces.
+fn output_lines(s: &mut String, scene: &ValidScene) {
+    let g = scene.grid();
     let o = &scene.output;
     let comps = |fname: &FieldName| -> usize {
         match fname {
@@ -388,7 +461,7 @@ pub fn describe(scene: &ValidScene) -> String {
             }
         }
     };
-    let values: usize = o.fields.iter().map(comps).sum::<usize>() * cells;
+    let values: usize = o.fields.iter().map(comps).sum::<usize>() * g.len();
     let snapshots = match o.every {
         Some(e) if e > 0.0 => (scene.numerics.end_time / e).ceil() as usize + 1,
         _ => 2,
@@ -424,6 +497,11 @@ pub fn describe(scene: &ValidScene) -> String {
     if !scene.bodies.is_empty() {
         let _ = writeln!(s, "  body surfaces: bodies.pvd, with every snapshot");
     }
+}
+
+/// When checkpoints are written and how many are kept.
+fn checkpoints_line(s: &mut String, scene: &ValidScene) {
+    let o = &scene.output;
     match o.checkpoint_every {
         Some(c) => {
             let _ = writeln!(
@@ -439,6 +517,10 @@ pub fn describe(scene: &ValidScene) -> String {
             );
         }
     }
+}
+
+/// The scene's warnings, one a line, or none.
+fn warnings_lines(s: &mut String, scene: &ValidScene) {
     let warnings = scene.warnings();
     if warnings.is_empty() {
         let _ = writeln!(s, "  warnings: none");
@@ -447,5 +529,4 @@ pub fn describe(scene: &ValidScene) -> String {
             let _ = writeln!(s, "  warning: {w}");
         }
     }
-    s
 }

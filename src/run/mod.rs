@@ -447,130 +447,213 @@ impl Run {
 /// The stepping loop of a run, then its closing outputs (`series.h5`, timings, plots, the
 /// log's last lines).
 fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunSummary> {
-    let end = run.sim.scene().numerics.end_time;
-    let every = run.sim.scene().output.every;
     let steps0 = run.sim.steps();
-    let bar = progress_bar(opts.quiet);
+    let mut progress = Progress::new(&run.sim, opts.quiet, wall0);
     let mut totals: Vec<(&'static str, f64)> = Vec::new();
-    let mut last_tenth = ((run.sim.time() / end).clamp(0.0, 1.0) * 10.0).floor() as u32;
-    let result: anyhow::Result<()> = (|| {
-        let run = &mut run;
+    let result = run.step_to_end(&mut progress, &mut totals);
+    progress.bar.finish_and_clear();
+    let (summary, snapshots) = run.close(steps0, totals, wall0)?;
+    log_end(&result, &summary, snapshots);
+    crate::io::runlog::timings_table(&summary.system_seconds, summary.steps_run, summary.wall);
+    write_timings(
+        &summary.dir.join("timings.csv"),
+        &summary.system_seconds,
+        summary.steps_run,
+    )?;
+    plot(&summary.dir, opts.quiet);
+    result?;
+    Ok(summary)
+}
+
+impl Run {
+    /// Step to the end time, writing each step's outputs, snapshots and checkpoints as they
+    /// fall due; then a final checkpoint.
+    fn step_to_end(
+        &mut self,
+        progress: &mut Progress,
+        totals: &mut Vec<(&'static str, f64)>,
+    ) -> anyhow::Result<()> {
+        let end = self.sim.scene().numerics.end_time;
+        let every = self.sim.scene().output.every;
         // The time the steps land on: the next output time with an Adaptive step, only the
         // end time with a Fixed one (see `TimeStep`), so a Fixed run does not depend on the
         // output times.
-        let lands_on_outputs = run.sim.scene().numerics.dt.lands_on_outputs();
+        let lands_on_outputs = self.sim.scene().numerics.dt.lands_on_outputs();
         let mut stop_at = None;
-        while run.sim.time() < end * (1.0 - 1e-12) {
-            let stop = match run.next_out {
+        while self.sim.time() < end * (1.0 - 1e-12) {
+            let stop = match self.next_out {
                 Some(o) if lands_on_outputs => o.min(end),
                 _ => end,
             };
             if stop_at != Some(stop) {
-                run.sim.set_stop_at(Some(stop));
+                self.sim.set_stop_at(Some(stop));
                 stop_at = Some(stop);
             }
-            if let Err(e) = run.sim.step() {
-                return Err(run.failed(e));
+            if let Err(e) = self.sim.step() {
+                return Err(self.failed(e));
             }
-            let sim = &mut run.sim;
-            run.series.row(sim)?;
-            if let Some(b) = run.bodies_csv.as_mut() {
-                b.rows(sim)?;
-            }
-            if let Some(c) = run.contacts_csv.as_mut() {
-                c.rows(sim)?;
-            }
-            run.snaps.record(sim);
-            for &(name, s) in &sim.timings().last {
-                match totals.iter_mut().find(|e| e.0 == name) {
-                    Some(e) => e.1 += s,
-                    None => totals.push((name, s)),
-                }
-            }
-            let frac = (sim.time() / end).clamp(0.0, 1.0);
-            let s = sim.sample();
-            bar.set_position((frac * 1000.0) as u64);
-            bar.set_message(format!(
-                "step {} t = {:.4} dt = {:.2e} max|ω| = {:.3e}",
-                sim.steps(),
-                s.t,
-                s.dt,
-                s.max_omega
-            ));
-            let tenth = (frac * 10.0).floor() as u32;
-            if bar.is_hidden() && !opts.quiet && tenth > last_tenth {
-                last_tenth = tenth;
-                eprintln!(
-                    "  {:>3}%  step {}  t = {:.4}  max|ω| = {:.3e}  {:.1} s",
-                    tenth * 10,
-                    sim.steps(),
-                    s.t,
-                    s.max_omega,
-                    wall0.elapsed().as_secs_f64()
-                );
-            }
-            // A snapshot after the first step at or after each output time (with its true
-            // time), and at the end; then the checkpoint.
-            // An output time missed by the rounding of the clock (a sum of steps) is reached.
-            let t = run.sim.time();
-            let slack = LAND_TOLERANCE * run.sim.sample().dt;
-            let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
-            if due(run.next_out) || t >= end * (1.0 - 1e-12) {
-                write_snapshot(&run.sim, &mut run.snaps)?;
-                if let Some(e) = every {
-                    // A step longer than `every` passes several output times: one snapshot.
-                    while let Some(o) = run.next_out.filter(|&o| due(Some(o)) && o + e > o) {
-                        run.next_out = Some(o + e);
-                    }
-                }
-            }
-            run.after_step(end)?;
+            self.record_step()?;
+            add_timings(totals, &self.sim.timings().last);
+            progress.show(&self.sim, end);
+            self.snapshot_if_due(end, every)?;
+            self.after_step(end)?;
         }
-        // A final checkpoint, from which the run can be continued (`--restart --until`).
-        if run.sim.scene().output.checkpoint_every.is_some()
-            && run
-                .last_ckpt
-                .as_ref()
-                .is_none_or(|(_, s, _)| *s != run.sim.steps())
-        {
-            run.checkpoint()?;
+        self.final_checkpoint()
+    }
+
+    /// The time series rows of the step just taken (series, bodies, contacts, `series.h5`).
+    fn record_step(&mut self) -> anyhow::Result<()> {
+        let sim = &mut self.sim;
+        self.series.row(sim)?;
+        if let Some(b) = self.bodies_csv.as_mut() {
+            b.rows(sim)?;
+        }
+        if let Some(c) = self.contacts_csv.as_mut() {
+            c.rows(sim)?;
+        }
+        self.snaps.record(sim);
+        Ok(())
+    }
+
+    /// A snapshot after the first step at or after each output time (with its true time),
+    /// and at the end.
+    fn snapshot_if_due(&mut self, end: f64, every: Option<f64>) -> anyhow::Result<()> {
+        // An output time missed by the rounding of the clock (a sum of steps) is reached.
+        let t = self.sim.time();
+        let slack = LAND_TOLERANCE * self.sim.sample().dt;
+        let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
+        if due(self.next_out) || t >= end * (1.0 - 1e-12) {
+            write_snapshot(&self.sim, &mut self.snaps)?;
+            if let Some(e) = every {
+                // A step longer than `every` passes several output times: one snapshot.
+                while let Some(o) = self.next_out.filter(|&o| due(Some(o)) && o + e > o) {
+                    self.next_out = Some(o + e);
+                }
+            }
         }
         Ok(())
-    })();
-    bar.finish_and_clear();
-    let Run {
-        sim,
-        dir,
-        mut series,
-        mut bodies_csv,
-        mut contacts_csv,
-        mut snaps,
-        ..
-    } = run;
-    series.flush()?;
-    if let Some(b) = bodies_csv.as_mut() {
-        b.flush()?;
     }
-    if let Some(c) = contacts_csv.as_mut() {
-        c.flush()?;
+
+    /// A final checkpoint, from which the run can be continued (`--restart --until`), when
+    /// checkpoints are periodic and the last one is not of this step.
+    fn final_checkpoint(&mut self) -> anyhow::Result<()> {
+        if self.sim.scene().output.checkpoint_every.is_some()
+            && self
+                .last_ckpt
+                .as_ref()
+                .is_none_or(|(_, s, _)| *s != self.sim.steps())
+        {
+            self.checkpoint()?;
+        }
+        Ok(())
     }
-    snaps.finish()?;
-    let wall = wall0.elapsed().as_secs_f64();
-    let summary = RunSummary {
-        dir: dir.clone(),
-        steps: sim.steps(),
-        steps_run: sim.steps() - steps0,
-        last: sim.sample(),
-        system_seconds: totals,
-        wall,
-    };
-    match &result {
+
+    /// Flush and close the outputs; the run's summary (`steps0` the steps before it,
+    /// `totals` the seconds per system) and the number of snapshots written.
+    fn close(
+        self,
+        steps0: u64,
+        totals: Vec<(&'static str, f64)>,
+        wall0: Instant,
+    ) -> anyhow::Result<(RunSummary, usize)> {
+        let Run {
+            sim,
+            dir,
+            mut series,
+            mut bodies_csv,
+            mut contacts_csv,
+            mut snaps,
+            ..
+        } = self;
+        series.flush()?;
+        if let Some(b) = bodies_csv.as_mut() {
+            b.flush()?;
+        }
+        if let Some(c) = contacts_csv.as_mut() {
+            c.flush()?;
+        }
+        snaps.finish()?;
+        let summary = RunSummary {
+            dir,
+            steps: sim.steps(),
+            steps_run: sim.steps() - steps0,
+            last: sim.sample(),
+            system_seconds: totals,
+            wall: wall0.elapsed().as_secs_f64(),
+        };
+        Ok((summary, snaps.count()))
+    }
+}
+
+/// Add one step's seconds per system to the run's totals (kept in schedule order).
+fn add_timings(totals: &mut Vec<(&'static str, f64)>, last: &[(&'static str, f64)]) {
+    for &(name, s) in last {
+        match totals.iter_mut().find(|e| e.0 == name) {
+            Some(e) => e.1 += s,
+            None => totals.push((name, s)),
+        }
+    }
+}
+
+/// The progress a run shows: a bar on a terminal, else a line at every tenth of the run
+/// (neither with `--quiet`).
+struct Progress {
+    bar: ProgressBar,
+    /// The last tenth of the run reached, 0 to 10.
+    last_tenth: u32,
+    quiet: bool,
+    wall0: Instant,
+}
+
+impl Progress {
+    /// The progress of a run starting from the state of `sim`.
+    fn new(sim: &Simulation, quiet: bool, wall0: Instant) -> Self {
+        let end = sim.scene().numerics.end_time;
+        Progress {
+            bar: progress_bar(quiet),
+            last_tenth: ((sim.time() / end).clamp(0.0, 1.0) * 10.0).floor() as u32,
+            quiet,
+            wall0,
+        }
+    }
+
+    /// Show the state after a step: the bar's position and message, or a line when a new
+    /// tenth of the run is reached.
+    fn show(&mut self, sim: &Simulation, end: f64) {
+        let frac = (sim.time() / end).clamp(0.0, 1.0);
+        let s = sim.sample();
+        self.bar.set_position((frac * 1000.0) as u64);
+        self.bar.set_message(format!(
+            "step {} t = {:.4} dt = {:.2e} max|ω| = {:.3e}",
+            sim.steps(),
+            s.t,
+            s.dt,
+            s.max_omega
+        ));
+        let tenth = (frac * 10.0).floor() as u32;
+        if self.bar.is_hidden() && !self.quiet && tenth > self.last_tenth {
+            self.last_tenth = tenth;
+            eprintln!(
+                "  {:>3}%  step {}  t = {:.4}  max|ω| = {:.3e}  {:.1} s",
+                tenth * 10,
+                sim.steps(),
+                s.t,
+                s.max_omega,
+                self.wall0.elapsed().as_secs_f64()
+            );
+        }
+    }
+}
+
+/// Log how the run ended: finished, interrupted (a warning) or stopped by an error.
+fn log_end(result: &anyhow::Result<()>, summary: &RunSummary, snapshots: usize) {
+    match result {
         Ok(()) => tracing::info!(
             "finished: {} steps to t = {}, {} snapshots, {:.2} s wall",
             summary.steps,
             summary.last.t,
-            snaps.count(),
-            wall
+            snapshots,
+            summary.wall
         ),
         Err(e) if e.downcast_ref::<Interrupted>().is_some() => tracing::warn!("{e}"),
         Err(_) => tracing::error!(
@@ -579,25 +662,20 @@ fn drive(mut run: Run, opts: &RunOptions, wall0: Instant) -> anyhow::Result<RunS
             summary.last.t
         ),
     }
-    crate::io::runlog::timings_table(&summary.system_seconds, summary.steps_run, wall);
-    write_timings(
-        &dir.join("timings.csv"),
-        &summary.system_seconds,
-        summary.steps_run,
-    )?;
-    // PNG plots of the time series (also after a stopped run: they show what happened). A
-    // plot that cannot be drawn is a warning, not a failed run.
-    match crate::io::plot::plot_run_dir(&dir) {
+}
+
+/// PNG plots of the time series in `dir` (also after a stopped run: they show what
+/// happened). A plot that cannot be drawn is a warning, not a failed run.
+fn plot(dir: &Path, quiet: bool) {
+    match crate::io::plot::plot_run_dir(dir) {
         Ok(files) => tracing::info!("plots: {}", files.len()),
         Err(e) => {
             tracing::warn!("no plots: {e:#}");
-            if !opts.quiet {
+            if !quiet {
                 eprintln!("warning: no plots: {e:#}");
             }
         }
     }
-    result?;
-    Ok(summary)
 }
 
 /// Whether `e` (from [`run_scene`] or [`restart_run`]) is a refused checkpoint or restart.

@@ -279,10 +279,144 @@ fn check_range(path: &[&'static str], r: &Range, positive: bool) -> Check {
     Ok(())
 }
 
+/// A `Random` layout: a count from 1 to [`MAX_GENERATED`], a gap not negative, and a region
+/// of `dim` finite entries, not empty, inside the domain `[lo, hi]`.
+fn check_random(
+    region: &Region,
+    count: usize,
+    gap: f64,
+    dim: usize,
+    lo: &[f64],
+    hi: &[f64],
+) -> Check {
+    let at = |k: &'static str, m: String| fail(&["layout", "Random", k], m);
+    if count == 0 {
+        return at(
+            "count",
+            "must be at least 1 (leave the generator out for none)".into(),
+        );
+    }
+    if count > MAX_GENERATED {
+        return at(
+            "count",
+            format!("at most {MAX_GENERATED} bodies per generator, got {count}"),
+        );
+    }
+    if !(gap.is_finite() && gap >= 0.0) {
+        return at("gap", format!("must be zero or positive, got {gap}"));
+    }
+    for (k, v) in [("min", &region.min), ("max", &region.max)] {
+        if v.len() != dim || v.iter().any(|x| !x.is_finite()) {
+            return fail(
+                &["layout", "Random", "region", k],
+                format!("needs {dim} finite entries, got {v:?}"),
+            );
+        }
+    }
+    if let Some(a) = (0..dim).find(|&a| region.min[a] >= region.max[a]) {
+        return at(
+            "region",
+            format!(
+                "min[{a}] = {} must be below max[{a}] = {}",
+                region.min[a], region.max[a]
+            ),
+        );
+    }
+    if (0..dim).any(|a| region.min[a] < lo[a] || region.max[a] > hi[a]) {
+        return at(
+            "region",
+            format!(
+                "the region [{:?}, {:?}] is not inside the domain [{lo:?}, {hi:?}]",
+                region.min, region.max
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// A `Lattice` layout: `dim` finite starts, positive spacings and counts of at least 1, at
+/// most [`MAX_GENERATED`] bodies, all inside the domain `[lo, hi]`.
+fn check_lattice(
+    start: &[f64],
+    spacing: &[f64],
+    counts: &[usize],
+    dim: usize,
+    lo: &[f64],
+    hi: &[f64],
+) -> Check {
+    let at = |k: &'static str, m: String| fail(&["layout", "Lattice", k], m);
+    if start.len() != dim || start.iter().any(|x| !x.is_finite()) {
+        return at(
+            "start",
+            format!("needs {dim} finite entries, got {start:?}"),
+        );
+    }
+    if spacing.len() != dim || spacing.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+        return at(
+            "spacing",
+            format!("needs {dim} positive entries, got {spacing:?}"),
+        );
+    }
+    if counts.len() != dim || counts.contains(&0) {
+        return at(
+            "counts",
+            format!("needs {dim} entries of at least 1, got {counts:?}"),
+        );
+    }
+    let total = counts.iter().try_fold(1usize, |a, &n| a.checked_mul(n));
+    if total.is_none_or(|n| n > MAX_GENERATED) {
+        return at(
+            "counts",
+            format!("at most {MAX_GENERATED} bodies per generator, got {counts:?}"),
+        );
+    }
+    for a in 0..dim {
+        let last = start[a] + (counts[a] - 1) as f64 * spacing[a];
+        if start[a] < lo[a] || last > hi[a] {
+            return at(
+                "start",
+                format!(
+                    "the lattice runs from {} to {last} along axis {a}, outside the \
+                     domain [{}, {}]",
+                    start[a], lo[a], hi[a]
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
 impl Generator {
     /// Check the values that do not depend on other bodies, in a `dim`-dimensional scene in
     /// the box `[lo, hi]`.
     fn check(&self, dim: usize, lo: &[f64], hi: &[f64]) -> Check {
+        self.check_shapes(dim)?;
+        if let Some(r) = &self.scale {
+            check_range(&["scale"], r, true)?;
+        }
+        self.check_densities()?;
+        if let Some(k) = self.kappa
+            && !(k.is_finite() && k >= 0.0)
+        {
+            return fail(&["kappa"], format!("must be zero or positive, got {k}"));
+        }
+        if self.name.chars().any(|c| c.is_control()) {
+            return fail(&["name"], "must not hold control characters");
+        }
+        match &self.layout {
+            Layout::Random { region, count, gap } => {
+                check_random(region, *count, *gap, dim, lo, hi)
+            }
+            Layout::Lattice {
+                start,
+                spacing,
+                counts,
+            } => check_lattice(start, spacing, counts, dim, lo, hi),
+        }
+    }
+
+    /// At least one shape, each valid in `dim` dimensions and bounded.
+    fn check_shapes(&self, dim: usize) -> Check {
         if self.shapes.is_empty() {
             return fail(
                 &["shapes"],
@@ -305,9 +439,11 @@ impl Generator {
                 ));
             }
         }
-        if let Some(r) = &self.scale {
-            check_range(&["scale"], r, true)?;
-        }
+        Ok(())
+    }
+
+    /// The densities, if given: positive, and a list not empty.
+    fn check_densities(&self) -> Check {
         match &self.densities {
             None => {}
             Some(Values::One(d)) if !(d.is_finite() && *d > 0.0) => {
@@ -326,105 +462,6 @@ impl Generator {
                 }
             }
             Some(Values::Range(r)) => check_range(&["densities"], r, true)?,
-        }
-        if let Some(k) = self.kappa
-            && !(k.is_finite() && k >= 0.0)
-        {
-            return fail(&["kappa"], format!("must be zero or positive, got {k}"));
-        }
-        if self.name.chars().any(|c| c.is_control()) {
-            return fail(&["name"], "must not hold control characters");
-        }
-        match &self.layout {
-            Layout::Random { region, count, gap } => {
-                let at = |k: &'static str, m: String| fail(&["layout", "Random", k], m);
-                if *count == 0 {
-                    return at(
-                        "count",
-                        "must be at least 1 (leave the generator out for none)".into(),
-                    );
-                }
-                if *count > MAX_GENERATED {
-                    return at(
-                        "count",
-                        format!("at most {MAX_GENERATED} bodies per generator, got {count}"),
-                    );
-                }
-                if !(gap.is_finite() && *gap >= 0.0) {
-                    return at("gap", format!("must be zero or positive, got {gap}"));
-                }
-                for (k, v) in [("min", &region.min), ("max", &region.max)] {
-                    if v.len() != dim || v.iter().any(|x| !x.is_finite()) {
-                        return fail(
-                            &["layout", "Random", "region", k],
-                            format!("needs {dim} finite entries, got {v:?}"),
-                        );
-                    }
-                }
-                if let Some(a) = (0..dim).find(|&a| region.min[a] >= region.max[a]) {
-                    return at(
-                        "region",
-                        format!(
-                            "min[{a}] = {} must be below max[{a}] = {}",
-                            region.min[a], region.max[a]
-                        ),
-                    );
-                }
-                if (0..dim).any(|a| region.min[a] < lo[a] || region.max[a] > hi[a]) {
-                    return at(
-                        "region",
-                        format!(
-                            "the region [{:?}, {:?}] is not inside the domain [{lo:?}, {hi:?}]",
-                            region.min, region.max
-                        ),
-                    );
-                }
-            }
-            Layout::Lattice {
-                start,
-                spacing,
-                counts,
-            } => {
-                let at = |k: &'static str, m: String| fail(&["layout", "Lattice", k], m);
-                if start.len() != dim || start.iter().any(|x| !x.is_finite()) {
-                    return at(
-                        "start",
-                        format!("needs {dim} finite entries, got {start:?}"),
-                    );
-                }
-                if spacing.len() != dim || spacing.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
-                    return at(
-                        "spacing",
-                        format!("needs {dim} positive entries, got {spacing:?}"),
-                    );
-                }
-                if counts.len() != dim || counts.contains(&0) {
-                    return at(
-                        "counts",
-                        format!("needs {dim} entries of at least 1, got {counts:?}"),
-                    );
-                }
-                let total = counts.iter().try_fold(1usize, |a, &n| a.checked_mul(n));
-                if total.is_none_or(|n| n > MAX_GENERATED) {
-                    return at(
-                        "counts",
-                        format!("at most {MAX_GENERATED} bodies per generator, got {counts:?}"),
-                    );
-                }
-                for a in 0..dim {
-                    let last = start[a] + (counts[a] - 1) as f64 * spacing[a];
-                    if start[a] < lo[a] || last > hi[a] {
-                        return at(
-                            "start",
-                            format!(
-                                "the lattice runs from {} to {last} along axis {a}, outside the \
-                                 domain [{}, {}]",
-                                start[a], lo[a], hi[a]
-                            ),
-                        );
-                    }
-                }
-            }
         }
         Ok(())
     }
