@@ -191,8 +191,18 @@ pub fn describe(scene: &ValidScene) -> String {
     bodies_lines(&mut s, scene);
     output_lines(&mut s, scene);
     checkpoints_line(&mut s, scene);
+    plugins_line(&mut s, scene);
     warnings_lines(&mut s, scene);
     s
+}
+
+/// The plugin sections the scene carries (checked by their plugins before this is printed).
+fn plugins_line(s: &mut String, scene: &ValidScene) {
+    if scene.plugins.is_empty() {
+        return;
+    }
+    let keys: Vec<&str> = scene.plugins.keys().map(String::as_str).collect();
+    let _ = writeln!(s, "  plugin sections: {} (checked)", keys.join(", "));
 }
 
 /// The scene's name and grid, its box, and the estimated memory and time per step.

@@ -148,6 +148,25 @@ fn sorted_files(dir: &Path) -> Vec<String> {
 fn the_example_writes_its_field_and_continues_bit_for_bit_after_ctrl_c() {
     let d = Scratch::new("example_plugin", "cli");
     let scene = scene_file();
+    // `check` through the example's command line checks and lists the section; `tumble`'s
+    // own refuses the scene (exit status 2), naming the section.
+    let o = example(&["check", s(&scene)]).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        out.contains("plugin sections: passive_scalar (checked)"),
+        "{out}"
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_tumble"))
+        .args(["check", s(&scene)])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("\"passive_scalar\"") && err.contains("no plugin"),
+        "{err}"
+    );
     let until = "4.0";
     let straight = d.join("straight");
     let o = example(&[
