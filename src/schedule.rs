@@ -637,16 +637,9 @@ impl PluginContext<'_> {
         self.keep_state(StateEntry {
             name,
             version,
-            save: |world| {
-                let r = world
-                    .get_resource::<R>()
-                    .ok_or_else(|| "the resource is missing".to_string())?;
-                postcard::to_stdvec(r).map_err(|e| e.to_string())
-            },
+            save: |world| encode(resource::<R>(world)?),
             restore: |world, bytes| {
-                let r: R =
-                    postcard::from_bytes(bytes).map_err(|e| format!("corrupt data ({e})"))?;
-                world.insert_resource(r);
+                world.insert_resource(decode::<R>(bytes)?);
                 Ok(())
             },
         })
@@ -664,18 +657,12 @@ impl PluginContext<'_> {
         self.keep_state(StateEntry {
             name,
             version,
-            save: |world| {
-                let r = world
-                    .get_resource::<R>()
-                    .ok_or_else(|| "the resource is missing".to_string())?;
-                postcard::to_stdvec(&r.save_part()).map_err(|e| e.to_string())
-            },
+            save: |world| encode(&resource::<R>(world)?.save_part()),
             restore: |world, bytes| {
-                let part: R::Part =
-                    postcard::from_bytes(bytes).map_err(|e| format!("corrupt data ({e})"))?;
+                let part = decode::<R::Part>(bytes)?;
                 world
                     .get_resource_mut::<R>()
-                    .ok_or_else(|| "the resource is missing".to_string())?
+                    .ok_or_else(|| MISSING.to_string())?
                     .restore_part(part);
                 Ok(())
             },
@@ -704,4 +691,21 @@ pub trait CheckpointPart: Resource<Mutability = bevy_ecs::component::Mutable> {
     fn save_part(&self) -> Self::Part;
     /// Put a saved part back.
     fn restore_part(&mut self, part: Self::Part);
+}
+
+const MISSING: &str = "the resource is missing";
+
+/// The resource a checkpoint record is saved from.
+fn resource<R: Resource>(world: &World) -> Result<&R, String> {
+    world.get_resource::<R>().ok_or_else(|| MISSING.to_string())
+}
+
+/// A checkpoint record's bytes (postcard).
+fn encode<T: Serialize + ?Sized>(value: &T) -> Result<Vec<u8>, String> {
+    postcard::to_stdvec(value).map_err(|e| e.to_string())
+}
+
+/// A checkpoint record read back.
+fn decode<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, String> {
+    postcard::from_bytes(bytes).map_err(|e| format!("corrupt data ({e})"))
 }

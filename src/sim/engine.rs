@@ -43,15 +43,30 @@ impl SimulationBuilder {
     /// [`Simulation::new`]).
     pub fn build(self) -> anyhow::Result<Simulation> {
         let builtin = crate::systems::builtin();
-        let plugins: Vec<&dyn Plugin> = builtin
-            .iter()
-            .map(|p| p.as_ref())
-            .chain(self.plugins.0.iter().map(|p| p.as_ref()))
-            .collect();
+        let plugins = with_builtin(&builtin, &self.plugins);
         let sections = self.scene.plugin_sections();
         sections.check(plugins.iter().copied())?;
         Simulation::with_plugins(self.scene, sections, &plugins)
     }
+}
+
+/// The built-in plugins, then `extra`, in the order they are built.
+fn with_builtin<'a>(builtin: &'a [Box<dyn Plugin>], extra: &'a PluginList) -> Vec<&'a dyn Plugin> {
+    builtin
+        .iter()
+        .map(|p| p.as_ref())
+        .chain(extra.0.iter().map(|p| p.as_ref()))
+        .collect()
+}
+
+/// Check `scene`'s plugin sections against the built-in plugins and `plugins`, as
+/// [`SimulationBuilder::build`] does, without setting anything up (for `tumble check`, and
+/// so that a run refuses a bad section before it makes its directory).
+pub fn check_plugin_sections(scene: &ValidScene, plugins: &PluginList) -> anyhow::Result<()> {
+    let builtin = crate::systems::builtin();
+    scene
+        .plugin_sections()
+        .check(with_builtin(&builtin, plugins))
 }
 
 impl Simulation {
