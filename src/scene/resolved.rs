@@ -53,6 +53,11 @@ pub(crate) fn resolve(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> Re
             moving.push(d);
         }
     }
+    // With a free surface the projection holds the walls rigid by giving them the density
+    // ρ (1 + λΔt χ) (`systems/pressure.rs`, `rigid_walls`), far beyond any contrast.
+    if scene.free_surface.is_some() && scene.bodies.iter().any(|b| b.kind == BodyKind::Static) {
+        moving.push(rho_f * scene.numerics.lambda);
+    }
     let multigrid = wants_multigrid(grid, moving);
     let eps = scene.contact.eps.unwrap_or(grid.h);
     let id = |n: &str| scene.bodies.iter().position(|b| b.name == n);

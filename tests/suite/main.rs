@@ -11,6 +11,7 @@ mod compressed;
 mod contact;
 mod contact_units;
 mod cup_mesh;
+mod dam_break;
 mod determinism;
 mod example_plugin;
 mod free_surface_output;
