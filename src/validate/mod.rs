@@ -129,6 +129,7 @@ pub const CASES: &[Case] = &[
     cases::standing_wave::CASE,
     cases::rayleigh_taylor::CASE,
     cases::floating::CASE,
+    cases::column_collapse::CASE,
     cases::cup::CASE,
 ];
 
@@ -173,6 +174,10 @@ pub const SCENES: &[(&str, &str)] = &[
     ),
     ("dkt.ron", include_str!("../../scenes/dkt.ron")),
     ("cup.ron", include_str!("../../scenes/cup.ron")),
+    (
+        "column-collapse.ron",
+        include_str!("../../scenes/column-collapse.ron"),
+    ),
     ("tank-200.ron", include_str!("../../scenes/tank-200.ron")),
     (
         "tank-200-vacuum.ron",

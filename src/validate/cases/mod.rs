@@ -2,6 +2,7 @@
 //! `CASE`, its description, references, tolerances and known failures beside its code.
 
 pub mod added_mass;
+pub mod column_collapse;
 mod common;
 pub mod cup;
 pub mod dkt;
