@@ -131,6 +131,7 @@ pub const CASES: &[Case] = &[
     cases::floating::CASE,
     cases::column_collapse::CASE,
     cases::cup::CASE,
+    cases::pool_drop::CASE,
 ];
 
 /// A case by name.
@@ -178,6 +179,7 @@ pub const SCENES: &[(&str, &str)] = &[
         "column-collapse.ron",
         include_str!("../../scenes/column-collapse.ron"),
     ),
+    ("pool-drop.ron", include_str!("../../scenes/pool-drop.ron")),
     ("tank-200.ron", include_str!("../../scenes/tank-200.ron")),
     (
         "tank-200-vacuum.ron",

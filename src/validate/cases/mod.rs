@@ -12,6 +12,7 @@ pub mod floating;
 pub mod high_re_sphere;
 pub mod lamb_oseen;
 pub mod poisson;
+pub mod pool_drop;
 pub mod rayleigh_taylor;
 pub mod rebound_vacuum;
 pub mod remesh;
