@@ -9,6 +9,7 @@
 //! at startup, so that the state at t = 0 holds the bodies.
 
 use crate::base::grid::Grid;
+use crate::bodies::coupling::MotionLaw;
 use crate::bodies::{Body, BodyFields, GridPatch, Material, NO_BODY};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
@@ -16,7 +17,7 @@ use rayon::prelude::*;
 /// The density system.
 pub fn density(
     grid: Res<Grid>,
-    bodies: Query<(&Body, &Material, &GridPatch)>,
+    bodies: Query<(&Body, &Material, &GridPatch, &MotionLaw)>,
     mut out: ResMut<BodyFields>,
 ) {
     let out = &mut *out;
@@ -29,8 +30,10 @@ pub fn density(
     out.phi.par_iter_mut().for_each(|p| *p = f64::NEG_INFINITY);
     out.owner.par_iter_mut().for_each(|o| *o = NO_BODY);
     // Bodies in spawn order, so overlapping patches add up in a fixed order.
-    for (body, mat, patch) in &bodies {
-        let (moving, density) = (!body.is_static(), mat.density);
+    for (body, mat, patch, law) in &bodies {
+        // Walls and bodies that move by Newton-Euler are fluid of the phases' density here.
+        let moving = !body.is_static() && *law == MotionLaw::Projected;
+        let density = mat.density;
         let [dx, dy, _] = patch.dims;
         if patch.is_empty() {
             continue;

@@ -84,7 +84,9 @@ impl Default for TimeStep {
 /// How gravity and a dynamic body's inertia reach the body (see `Numerics::body_coupling`).
 ///
 /// `Pressure` is the model (issue 16): one variable-density projection carries buoyancy and
-/// added mass for every density ratio. The other two are research variants kept for
+/// added mass for every density ratio; within it, a body at least twice as heavy as the
+/// largest added mass of its shape moves by Newton-Euler with its own mass (issue 35,
+/// `bodies::coupling::MotionLaw`; the numbers below are the projection's, before that). The other two are research variants kept for
 /// comparison. Measured on a sphere (radius 0.1, h = 1/32) settling at Re ≈ 2e-4 in a
 /// periodic unit box, against Hasimoto's Stokes drag for a cubic array (`stokes-settling`),
 /// and on a disk and a sphere launched in still inviscid fluid (`added-mass`):

@@ -3,6 +3,8 @@
 //! defaults ([`crate::scene::Resolved`]).
 
 use crate::base::grid::Grid;
+use crate::base::params::BodyCoupling;
+use crate::bodies::coupling::{MotionLaw, motion_law};
 use crate::bodies::levelset::LocalLevelSet;
 use crate::bodies::{
     Body, BodyKind, BodyShape, BodySurface, ContactPoints, ContactState, FreeMotion, GridPatch,
@@ -35,6 +37,26 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             matches!(spec.kind, BodyKind::Dynamic),
         );
         let density = resolved.densities[id];
+        // Newton-Euler or the projection: decided once, from the density and the shape. With
+        // a free surface every body stays `Projected`: the phase inside a moving body is the
+        // one its rigid motion carried in, not the fluid it displaces now, and Newton-Euler
+        // would take its buoyancy from it.
+        let params = &resolved.params;
+        let law = match spec.kind {
+            BodyKind::Dynamic
+                if params.numerics.body_coupling == BodyCoupling::Pressure
+                    && !params.free_surface =>
+            {
+                motion_law(
+                    &level_set,
+                    grid.h,
+                    grid.dim,
+                    density,
+                    resolved.params.rho_fluid,
+                )
+            }
+            _ => MotionLaw::Projected,
+        };
         let orientation = crate::bodies::rotation(&spec.rotation);
         let (velocity, angular_velocity) = match &spec.kind {
             BodyKind::Dynamic => (vec3(&spec.velocity), angular3(&spec.angular_velocity)),
@@ -77,6 +99,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
                 inertia: DMat3::ZERO,
             },
             Material { density },
+            law,
             BodyShape { level_set },
             patch,
             Hydro::default(),

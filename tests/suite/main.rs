@@ -18,6 +18,7 @@ mod free_surface_output;
 mod generators;
 mod kernels;
 mod layers;
+mod motion_law;
 mod multigrid;
 mod output;
 mod plot;
