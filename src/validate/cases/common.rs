@@ -210,10 +210,6 @@ pub fn surface_height(sim: &Simulation, i: usize, guess: f64) -> f64 {
     best
 }
 
-pub(super) fn ratios(quick: bool) -> &'static [f64] {
-    if quick {
-        &[10.0, 100.0]
-    } else {
-        &[10.0, 100.0, 1000.0]
-    }
-}
+/// The gas : liquid density ratios of the free-surface gates, up to air and water (1:1000,
+/// issue 34), in both tiers.
+pub(super) const RATIOS: [f64; 3] = [10.0, 100.0, 1000.0];

@@ -3,7 +3,7 @@
 
 use super::common::{surface_height, tank};
 use crate::sim::engine::Simulation;
-use crate::validate::{Case, Report, Row, RunTime};
+use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
 
 /// The case: what it checks, against what, and the rows known to fail.
 pub const CASE: Case = Case {
@@ -15,7 +15,12 @@ pub const CASE: Case = Case {
     full_time: RunTime::Minutes,
     quick_time: RunTime::Seconds,
     run: floating,
-    known_failures: &[],
+    known_failures: &[KnownFailure {
+        row: "box of density 0.75, 1:1000, h = 1/128: draft",
+        quick: false,
+        full: true,
+        why: "0.0854 against 0.0750 (1.04e-2, one cell is 7.8e-3; the boxes of density 0.25 and 0.5 within half a cell), measured on 0319f93: the case has no side walls and its pool never comes to rest at h = 1/128 (issue 35, which adds them)",
+    }],
 };
 
 /// Archimedes: three flat boxes (width 0.3, height 0.1, densities 0.25, 0.5, 0.75) released

@@ -1,7 +1,7 @@
 //! `standing-wave`: a standing wave against the two-fluid dispersion relation (issue 17's gates; a
 //! 2D tank closed by a floor and a lid, periodic along x).
 
-use super::common::{ratios, surface_height, tank};
+use super::common::{RATIOS, surface_height, tank};
 use crate::sim::engine::Simulation;
 use crate::validate::{Case, KnownFailure, PlotSpec, Report, Row, RunTime};
 use std::f64::consts::PI;
@@ -11,8 +11,8 @@ pub const CASE: Case = Case {
     name: "standing-wave",
     description: "a standing wave (wavelength 1, amplitude 0.01, depth 0.5 under 0.5 of gas) oscillates at the two-fluid dispersion frequency within 2%; its amplitude never grows",
     reference: "linear theory: omega^2 = g k (rho1 - rho2) / (rho1 coth k h1 + rho2 coth k h2)",
-    full: "2D, h = 1/128, 3 periods, ratios 1:10, 1:100, 1:1000",
-    quick: "2D, h = 1/64, 2 periods, ratios 1:10 and 1:100",
+    full: "2D, h = 1/128, 10 periods, ratios 1:10, 1:100, 1:1000",
+    quick: "2D, h = 1/64, 2 periods, ratios 1:10, 1:100, 1:1000",
     full_time: RunTime::Minutes,
     quick_time: RunTime::Seconds,
     run: standing_wave,
@@ -28,6 +28,18 @@ pub const CASE: Case = Case {
             quick: true,
             full: false,
             why: "the fourth half-period peak is 0.01004 against 0.00982 a period before (+2.2%): at ratios of 1:100 and above the interface gets noisy after two periods (at 1:1000 and h = 1/128 the zero crossings become erratic after t = 5); issue 17",
+        },
+        KnownFailure {
+            row: "1:1000 wave, h = 1/64: frequency",
+            quick: true,
+            full: false,
+            why: "+2.6% (2.5651 against 2.4995) at h = 1/64; at h = 1/128 (the full tier, 10 periods) +1.4% and the amplitude never grows: the interface's smoothed density over 2h at air and water; issue 34",
+        },
+        KnownFailure {
+            row: "1:1000 wave: amplitude never grows",
+            quick: true,
+            full: false,
+            why: "half-period peaks 0.00975, 0.00998, 0.01002, 0.01008 at h = 1/64 (+3.4% over two periods); at h = 1/128 the wave decays over 10 periods (0.00988 to 0.0073); issue 34",
         },
     ],
 };
@@ -45,9 +57,9 @@ pub fn standing_wave(quick: bool) -> anyhow::Result<Report> {
     let mut rep = Report::new("standing-wave");
     let h = if quick { 1.0 / 64.0 } else { 1.0 / 128.0 };
     let (g, k, a0) = (1.0, 2.0 * PI, 0.01);
-    for &r in ratios(quick) {
+    for r in RATIOS {
         let w = dispersion(g, k, 1.0, 1.0 / r, 0.5, 0.5);
-        let periods = if quick { 2.0 } else { 3.0 };
+        let periods = if quick { 2.0 } else { 10.0 };
         let end = periods * 2.0 * PI / w + 0.1;
         let scene = tank(
             "standing-wave",
