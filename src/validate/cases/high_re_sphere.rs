@@ -39,7 +39,7 @@ pub const CASE: Case = Case {
         row: "64^3: energy removed by the grid-scale dissipation by t = 0.1 at 0.25 of the step",
         quick: true,
         full: true,
-        why: "+18.7% (2.618e-3 against 2.206e-3, each interpolated to t = 0.1 between the steps around it; +4.4% at half the step). The dissipation is a rate per unit time, exactly (tests/suite/spectral.rs), but the state it acts on is not: the M'4 remesh, the method's other sink at the grid scale, damps a mode by O(delta^2) per step, so over a fixed time by O(dt), and at a smaller step more energy reaches the grid scale and the dissipation removes more. Taylor-Green at 64^3 shows the same: removed by t = 5 2.79e-4, 3.61e-4, 4.51e-4 at c = 0.5, 0.25, 0.125 (a per-step filter would remove 2 and 4 times as much); issue 32",
+        why: "+19.4% (2.615e-3 against 2.191e-3, each interpolated to t = 0.1 between the steps around it; +4.8% at half the step; +18.7% before the sphere moved by Newton-Euler, issue 35). The dissipation is a rate per unit time, exactly (tests/suite/spectral.rs), but the state it acts on is not: the M'4 remesh, the method's other sink at the grid scale, damps a mode by O(delta^2) per step, so over a fixed time by O(dt), and at a smaller step more energy reaches the grid scale and the dissipation removes more. Taylor-Green at 64^3 shows the same: removed by t = 5 2.79e-4, 3.61e-4, 4.51e-4 at c = 0.5, 0.25, 0.125 (a per-step filter would remove 2 and 4 times as much); issue 32",
     }],
 };
 
