@@ -25,37 +25,37 @@ pub const CASE: Case = Case {
             row: "box of density 0.25, 1:100, h = 1/64: largest relative growth",
             quick: true,
             full: true,
-            why: "measured on f0aaa7d: 3.09e-2 (peaks 15.00, 15.05, 14.79, 14.90, 14.60, 15.06, 14.73, 14.29, 13.89 deg): the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes (issue 35)",
+            why: "measured on f0aaa7d: 3.09e-2 (peaks 15.00, 15.05, 14.79, 14.90, 14.60, 15.06, 14.73, 14.29, 13.89 deg): the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes: under body_coupling Pressure a projected body's weight beyond the fluid it displaces is a kick on its velocity alone (systems/rigid_velocity.rs), its moment about the centroid, which is the righting moment, is dropped; with that moment added (an experiment, not committed) the boxes right to 1-2 deg by t = 6 (issue 35)",
         },
         KnownFailure {
             row: "box of density 0.5, 1:100, h = 1/64: largest relative growth",
             quick: true,
             full: true,
-            why: "measured on f0aaa7d: 7.84e-2 (peaks 15.00, 15.00, 15.15, 16.33, 15.24, 16.22, 15.63, 15.29, 14.94, 15.65, 15.22, 14.36 deg): the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes (issue 35)",
+            why: "measured on f0aaa7d: 7.84e-2 (peaks 15.00, 15.00, 15.15, 16.33, 15.24, 16.22, 15.63, 15.29, 14.94, 15.65, 15.22, 14.36 deg): the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes: under body_coupling Pressure a projected body's weight beyond the fluid it displaces is a kick on its velocity alone (systems/rigid_velocity.rs), its moment about the centroid, which is the righting moment, is dropped; with that moment added (an experiment, not committed) the boxes right to 1-2 deg by t = 6 (issue 35)",
         },
         KnownFailure {
             row: "box of density 0.75, 1:100, h = 1/64: largest relative growth",
             quick: true,
             full: true,
-            why: "measured on f0aaa7d: 0.177 (peaks 15.00, 15.97, 18.79, 20.39, 19.43, 18.07, 17.79, 16.34, 18.73, 17.48, 13.50 deg): the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes (issue 35)",
+            why: "measured on f0aaa7d: 0.177 (peaks 15.00, 15.97, 18.79, 20.39, 19.43, 18.07, 17.79, 16.34, 18.73, 17.48, 13.50 deg): the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes: under body_coupling Pressure a projected body's weight beyond the fluid it displaces is a kick on its velocity alone (systems/rigid_velocity.rs), its moment about the centroid, which is the righting moment, is dropped; with that moment added (an experiment, not committed) the boxes right to 1-2 deg by t = 6 (issue 35)",
         },
         KnownFailure {
             row: "box of density 0.25, 1:100, h = 1/64: largest roll",
             quick: true,
             full: true,
-            why: "measured on f0aaa7d: 14.7 deg over t = 18 to 24: the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes (issue 35)",
+            why: "measured on f0aaa7d: 14.7 deg over t = 18 to 24: the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes: under body_coupling Pressure a projected body's weight beyond the fluid it displaces is a kick on its velocity alone (systems/rigid_velocity.rs), its moment about the centroid, which is the righting moment, is dropped; with that moment added (an experiment, not committed) the boxes right to 1-2 deg by t = 6 (issue 35)",
         },
         KnownFailure {
             row: "box of density 0.5, 1:100, h = 1/64: largest roll",
             quick: true,
             full: true,
-            why: "measured on f0aaa7d: 15.7 deg over t = 18 to 24: the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes (issue 35)",
+            why: "measured on f0aaa7d: 15.7 deg over t = 18 to 24: the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes: under body_coupling Pressure a projected body's weight beyond the fluid it displaces is a kick on its velocity alone (systems/rigid_velocity.rs), its moment about the centroid, which is the righting moment, is dropped; with that moment added (an experiment, not committed) the boxes right to 1-2 deg by t = 6 (issue 35)",
         },
         KnownFailure {
             row: "box of density 0.75, 1:100, h = 1/64: largest roll",
             quick: true,
             full: true,
-            why: "measured on f0aaa7d: 18.7 deg over t = 18 to 24: the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes (issue 35)",
+            why: "measured on f0aaa7d: 18.7 deg over t = 18 to 24: the boxes keep their heel: at h = 1/64 a box's angular velocity is about 1e-3 after 0.3 time units where the hydrostatic righting moment (rho_w g V GM sin 15 deg over the box's inertia) gives an angular acceleration of several per time squared; the righting moment does not reach the boxes: under body_coupling Pressure a projected body's weight beyond the fluid it displaces is a kick on its velocity alone (systems/rigid_velocity.rs), its moment about the centroid, which is the righting moment, is dropped; with that moment added (an experiment, not committed) the boxes right to 1-2 deg by t = 6 (issue 35)",
         },
         KnownFailure {
             row: "1:100, h = 1/64: largest rise",
@@ -374,7 +374,8 @@ fn run(rep: &mut Report, h: f64, r: f64) -> anyhow::Result<()> {
         .iter()
         .map(|x| ((x - x0) / hh).round() as usize)
         .collect();
-    let mut theta: [Vec<f64>; 3] = Default::default();
+    // The roll of each box, from the release (the scene's pose) then after every step.
+    let mut theta: [Vec<f64>; 3] = [vec![HEEL], vec![HEEL], vec![HEEL]];
     let mut e_end = f64::NAN;
     // The energy's lowest value since `T_REF` and its largest rise above an earlier value:
     // (rise, from t, to t).
