@@ -40,6 +40,12 @@
 //! 0.929 (20) and 0.84 (100). The lagged added mass of the outside fluid makes this explicit
 //! update unstable for light bodies, which keep the projection.
 //!
+//! Under `Pressure` (either law) the excess weight's moment about the rigid region's
+//! centroid, weight at the body's centroid and buoyancy at the centroid of the fluid it
+//! displaces, turns the body over the step: the righting moment of a floating body, which the
+//! projection alone does not give (it carries only the phases' weight). A box of density 0.5
+//! heeled 15° in a free surface kept its heel without it.
+//!
 //! On the first step a dynamic body keeps the velocity and angular velocity the scene gives it
 //! (the flow inside it is whatever the initial vorticity makes), and the penalization imposes
 //! them on the flow; from then on they follow from the flow as above.
@@ -179,6 +185,17 @@ pub fn rigid_velocity(
         } else {
             DVec3::ZERO
         };
+        // Its moment about the rigid region's centroid over the step: the weight acts at the
+        // body's centroid, the buoyancy at the centroid of the fluid it displaces (apart
+        // where the phase density varies across the body: a box heeled in a free surface).
+        // This is the righting moment; without it a heeled floating box kept its heel.
+        let torque_impulse = if pressure {
+            ((geo.1 - wcentroid).cross(mat.density * state.volume * g)
+                - (displaced.1 - wcentroid).cross(displaced.0 * g))
+                * time.dt
+        } else {
+            DVec3::ZERO
+        };
         let first = fields.dt_prev <= 0.0;
         if pressure && *law == MotionLaw::NewtonEuler {
             // The projection carried the rigid region as fluid of the phases' density: its
@@ -189,9 +206,11 @@ pub fn rigid_velocity(
             let e = mat.density * state.volume - displaced.0;
             let e_rho = e / state.volume;
             let weight = e * g * time.dt;
+            let j_body = wj + e_rho * state.inertia;
             if first {
                 *hydro = Hydro::default();
                 state.velocity += weight / (m_w + e);
+                state.angular_velocity += solve_inertia(grid.dim, j_body, torque_impulse);
                 continue;
             }
             let dt = fields.dt_prev;
@@ -206,8 +225,8 @@ pub fn rigid_velocity(
             let l_fluid = ang - wj * w_prev;
             state.angular_velocity = solve_inertia(
                 grid.dim,
-                wj + e_rho * state.inertia,
-                ang + e_rho * (j_old * w_prev),
+                j_body,
+                ang + e_rho * (j_old * w_prev) + torque_impulse,
             );
             *hydro = Hydro {
                 force: p_fluid / dt,
@@ -215,9 +234,12 @@ pub fn rigid_velocity(
             };
             continue;
         }
+        // The same moment on the rigid region's inertia (wj: its mass there, as wvol above).
+        let spin_kick = solve_inertia(grid.dim, wj, torque_impulse);
         if first {
             *hydro = Hydro::default();
             state.velocity += kick;
+            state.angular_velocity += spin_kick;
             continue;
         }
         if pressure {
@@ -230,7 +252,7 @@ pub fn rigid_velocity(
                 torque: wj * (w_flow - w_prev) / dt,
             };
             state.velocity = v_flow + kick;
-            state.angular_velocity = w_flow;
+            state.angular_velocity = w_flow + spin_kick;
             continue;
         }
         if !momentum {
