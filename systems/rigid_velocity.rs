@@ -154,6 +154,13 @@ pub fn rigid_velocity(
         state.volume = geo.0;
         state.centroid = geo.1;
         state.inertia = geo.4;
+        // The inertia the body had last step (this one's before the first): its excess mass
+        // keeps its angular momentum J_i^n Ω^n as it turns.
+        let j_old = if j_prev == DMat3::ZERO {
+            state.inertia
+        } else {
+            j_prev
+        };
         let has_volume = geo.0 > 0.0;
         if !has_volume {
             continue;
@@ -178,13 +185,12 @@ pub fn rigid_velocity(
         let w_flow = solve_inertia(grid.dim, j, ang);
         // Before the first step the body has the velocities the scene gives it (the flow
         // inside it does not know them yet): the first penalization imposes them.
-        // Under the pressure projection, this step's impulse of the body's weight beyond the
-        // fluid it displaces (wvol is the body's mass there).
-        let kick = if pressure {
-            (mat.density * state.volume - displaced.0) * g * time.dt / wvol
-        } else {
-            DVec3::ZERO
-        };
+        // Under the pressure projection, E, the body's mass beyond the fluid it displaces, and
+        // the impulse of its weight over this step (`weight`), on the rigid region's mass wvol
+        // (`kick`).
+        let e = mat.density * state.volume - displaced.0;
+        let weight = e * g * time.dt;
+        let kick = if pressure { weight / wvol } else { DVec3::ZERO };
         // Its moment about the rigid region's centroid over the step: the weight acts at the
         // body's centroid, the buoyancy at the centroid of the fluid it displaces (apart
         // where the phase density varies across the body: a box heeled in a free surface).
@@ -200,12 +206,10 @@ pub fn rigid_velocity(
         if pressure && *law == MotionLaw::NewtonEuler {
             // The projection carried the rigid region as fluid of the phases' density: its
             // mass is M_w = wvol, its momentum and angular momentum `mom`, `ang` (about the
-            // centroid of ρw). E is the body's mass beyond the fluid it displaces, E_J its
-            // inertia beyond the displaced fluid's (with the mean displaced density).
+            // centroid of ρw); the body's inertia beyond the displaced fluid's is e_rho J_i
+            // (with the mean displaced density).
             let m_w = wvol;
-            let e = mat.density * state.volume - displaced.0;
             let e_rho = e / state.volume;
-            let weight = e * g * time.dt;
             let j_body = wj + e_rho * state.inertia;
             if first {
                 *hydro = Hydro::default();
@@ -216,12 +220,6 @@ pub fn rigid_velocity(
             let dt = fields.dt_prev;
             let p_fluid = mom - m_w * v_prev;
             state.velocity = v_prev + (p_fluid + weight) / (m_w + e);
-            // The excess inertia keeps its angular momentum as the body turns (J_i as it was).
-            let j_old = if j_prev == DMat3::ZERO {
-                state.inertia
-            } else {
-                j_prev
-            };
             let l_fluid = ang - wj * w_prev;
             state.angular_velocity = solve_inertia(
                 grid.dim,
@@ -275,11 +273,6 @@ pub fn rigid_velocity(
         // (J_i as it was, so that a tumbling body's excess part keeps J_i Ω exactly).
         let j_w = rho_f * wj;
         let l_fluid = rho_f * ang - j_w * w_prev;
-        let j_old = if j_prev == DMat3::ZERO {
-            state.inertia
-        } else {
-            j_prev
-        };
         let l_body = rho_f * ang + excess * (j_old * w_prev);
         state.angular_velocity = solve_inertia(grid.dim, j_w + excess * state.inertia, l_body);
         *hydro = Hydro {

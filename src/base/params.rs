@@ -86,8 +86,8 @@ impl Default for TimeStep {
 /// `Pressure` is the model (issue 16): one variable-density projection carries buoyancy and
 /// added mass for every density ratio; within it, a body at least twice as heavy as the
 /// largest added mass of its shape moves by Newton-Euler with its own mass (issue 35,
-/// `bodies::coupling::MotionLaw`; the numbers below are the projection's, before that). The other two are research variants kept for
-/// comparison. Measured on a sphere (radius 0.1, h = 1/32) settling at Re ≈ 2e-4 in a
+/// `bodies::coupling::MotionLaw`; the numbers below are the projection's, before that). The
+/// other two are research variants kept for comparison. Measured on a sphere (radius 0.1, h = 1/32) settling at Re ≈ 2e-4 in a
 /// periodic unit box, against Hasimoto's Stokes drag for a cubic array (`stokes-settling`),
 /// and on a disk and a sphere launched in still inviscid fluid (`added-mass`):
 /// - `Pressure` (the default): settling +7.9%, +2.4%, -0.6%, -5.9%, -16%, -59% at ρ_i = 0.01,

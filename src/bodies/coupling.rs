@@ -61,8 +61,8 @@ pub enum MotionLaw {
 /// 1.5 ρ_F (4/3) π R³ in 3D. R is the longest semi-axis of the body's equivalent ellipse or
 /// ellipsoid (the one with its volume and second moments), from its reference level set
 /// sampled at half the grid spacing `h` (`dim` 2 or 3): a sphere moves by Newton-Euler from
-/// density 1 (m_a = V/2), a disk from 2 (m_a = A), a plate of aspect ratio 10 broadside from
-/// about 16. Unbounded shapes stay `Projected`.
+/// density 1 (m_a = V/2), a disk from 2 (m_a = A), an ellipse of aspect ratio 10 from about 38
+/// (its broadside added mass is ten times its own fluid's). Unbounded shapes stay `Projected`.
 pub fn motion_law(
     level_set: &crate::bodies::levelset::LocalLevelSet,
     h: f64,

@@ -47,13 +47,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
                 if params.numerics.body_coupling == BodyCoupling::Pressure
                     && !params.free_surface =>
             {
-                motion_law(
-                    &level_set,
-                    grid.h,
-                    grid.dim,
-                    density,
-                    resolved.params.rho_fluid,
-                )
+                motion_law(&level_set, grid.h, grid.dim, density, params.rho_fluid)
             }
             _ => MotionLaw::Projected,
         };

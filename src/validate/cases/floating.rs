@@ -2,6 +2,7 @@
 //! decay): a 2D tank closed on all four sides.
 
 use super::common::{dynamic_states, energy, surface_height};
+use crate::base::fields::Params;
 use crate::base::kernels::heaviside;
 use crate::bodies::BodyFields;
 use crate::bodies::free_surface::LiquidLevelSet;
@@ -269,6 +270,7 @@ fn tank_energy(sim: &mut Simulation, gas: f64) -> f64 {
         })
         .sum();
     let grid = sim.grid();
+    let eps = sim.world.resource::<Params>().numerics.interface_cells * grid.h;
     let phi = &sim.world.resource::<LiquidLevelSet>().phi;
     let chi = &sim.world.resource::<BodyFields>().chi;
     let u = &sim.fields().u;
@@ -281,7 +283,7 @@ fn tank_energy(sim: &mut Simulation, gas: f64) -> f64 {
             if w == 0.0 {
                 continue;
             }
-            let rho = w * (gas + (1.0 - gas) * heaviside(phi[c], grid.h));
+            let rho = w * (gas + (1.0 - gas) * heaviside(phi[c], eps));
             fluid += rho
                 * (0.5 * (u[0][c] * u[0][c] + u[1][c] * u[1][c]) + G * grid.pos(i, j, 0)[1])
                 * dv;
