@@ -323,20 +323,21 @@ pub fn next_dt(
 /// up to about N² ε dt; the rest is then taken as one step rather than split in two.
 pub const LAND_TOLERANCE: f64 = 1e-6;
 
-/// Shorten `dt` so that the clock lands exactly on `stop_at`, without leaving a sliver: the
-/// rest is one step when it is at most `dt` (or longer by [`LAND_TOLERANCE`]), two halves when
-/// it is less than two steps.
+/// Shorten `dt` so that the clock lands exactly on `stop_at`: the time left is split evenly
+/// over the fewest steps no longer than `dt` (the last may be longer by [`LAND_TOLERANCE`]), as
+/// Basilisk's `dtnext` does. The step then changes by at most dt/(n + 1) with n steps to go,
+/// once, when the stop time comes into view, instead of a sliver step at the end: with no-slip
+/// imposed once per step, a short step changes the body's drag (issue 35 measured a 4.2% jump
+/// at one shortened step), so an output time must not make one.
 pub fn land_on(t: f64, dt: f64, stop_at: Option<f64>) -> f64 {
     match stop_at {
         Some(stop) if stop > t => {
             let rest = stop - t;
             if rest <= dt * (1.0 + LAND_TOLERANCE) {
-                rest
-            } else if rest < 2.0 * dt {
-                0.5 * rest
-            } else {
-                dt
+                return rest;
             }
+            let n = (rest / (dt * (1.0 + LAND_TOLERANCE))).ceil();
+            rest / n
         }
         _ => dt,
     }

@@ -14,9 +14,10 @@ use serde::{Deserialize, Serialize};
 ///   time); the run ends at the first step at or after the end time (to rounding: a `dt` that
 ///   divides the end time ends on it), so it may end up to one step past it.
 /// - `Adaptive`: steps are shortened to land exactly on each output time and on the end time,
-///   so snapshots are at the output times. The steps that follow depend on the state, so the
-///   result depends on `output.every`, within the time discretization error (the shortened
-///   step still meets every bound of the policy).
+///   so snapshots are at the output times: the time left to the next one is split evenly over
+///   the fewest steps the policy allows (no sliver step before an output time). The steps
+///   depend on the state, so the result depends on `output.every`, within the time
+///   discretization error (the shortened steps still meet every bound of the policy).
 #[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub enum TimeStep {
@@ -151,8 +152,8 @@ pub struct Numerics {
     /// Time step policy. Default: `Adaptive(c: 0.5)`.
     pub dt: TimeStep,
     /// Simulated time at which the run ends, time units, > 0. An adaptive run lands on it
-    /// exactly (the last step shortened, the last two halved when less than two steps
-    /// remain); a `Fixed` run ends at the first step at or after it. Default: 1.
+    /// exactly (the time left split evenly over the fewest steps the policy allows); a
+    /// `Fixed` run ends at the first step at or after it. Default: 1.
     pub end_time: f64,
     /// Particle creation cutoff, relative to max|ω| (dimensionless, in [0, 1)): grid nodes with
     /// |ω| at or below `remesh_cutoff * max|ω|` create no particle and keep their (small)

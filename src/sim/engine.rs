@@ -169,9 +169,9 @@ impl Simulation {
 
     /// Step until `t_end` (landing on it exactly), calling `each` after every step.
     ///
-    /// Landing on `t_end` shortens the last step (the last two when less than two steps
-    /// remain), with a `Fixed` step too: calling this at intermediate times changes the steps
-    /// that follow. To sample a `Fixed` run at times without changing it, set the end time with
+    /// Landing on `t_end` evens out the steps before it (the time left split evenly over the
+    /// fewest steps the policy allows) with an `Adaptive` step: calling this at intermediate
+    /// times changes the steps that follow. To sample a `Fixed` run at times without changing it, set the end time with
     /// [`Simulation::set_stop_at`] once and step while [`Simulation::time`] is before each
     /// sample time, as `tumble run` does for its snapshots.
     pub fn run_until(
@@ -188,8 +188,8 @@ impl Simulation {
     }
 
     /// Make the clock land exactly on `t` (the end time, or with an Adaptive step an output
-    /// time; see [`crate::base::params::TimeStep`]): the steps are shortened as they come
-    /// near it. `None` lands nowhere. The next step is recomputed now.
+    /// time; see [`crate::base::params::TimeStep`]): the time left is split evenly over the
+    /// fewest steps the policy allows. `None` lands nowhere. The next step is recomputed now.
     pub fn set_stop_at(&mut self, t: Option<f64>) {
         let (h, dim) = (self.grid().h, self.grid().dim);
         let params = self.world.resource::<Params>().clone();

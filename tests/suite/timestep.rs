@@ -282,3 +282,32 @@ fn a_flow_from_rest_that_passes_the_free_fall_speed_stops() {
     let e = sim.step().unwrap_err().to_string();
     assert!(e.contains("free fall"), "{e}");
 }
+
+/// Landing on a stop time splits the time left evenly over the fewest steps no longer than the
+/// policy's step (Basilisk's `dtnext`): no sliver step before an output time, and the step
+/// shrinks by at most dt / (n + 1) with n steps to go.
+#[test]
+fn landing_evens_out_the_steps_before_a_stop_time() {
+    use tumble::systems::diagnostics::land_on;
+    let dt = 0.1;
+    for rest in [0.05, 0.1, 0.1000000001, 0.15, 0.2001, 0.95, 1.05, 3.333] {
+        let (mut t, mut steps) = (0.0, Vec::new());
+        while t < rest * (1.0 - 1e-12) {
+            let s = land_on(t, dt, Some(rest));
+            steps.push(s);
+            t += s;
+        }
+        let n = (rest / dt - 1e-6).ceil().max(1.0);
+        assert_eq!(steps.len() as f64, n, "rest {rest}: {steps:?}");
+        assert!((t - rest).abs() < 1e-12, "rest {rest}: lands at {t}");
+        for &s in &steps {
+            assert!(s <= dt * (1.0 + 1e-6), "rest {rest}: step {s} beyond dt");
+            assert!(
+                (s - rest / n).abs() < 1e-12,
+                "rest {rest}: uneven steps {steps:?}"
+            );
+        }
+    }
+    assert_eq!(land_on(0.3, dt, None), dt);
+    assert_eq!(land_on(0.3, dt, Some(0.2)), dt);
+}
