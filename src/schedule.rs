@@ -66,6 +66,9 @@ pub enum PhysicsSet {
     Diffusion,
     /// Velocity from vorticity (eq. 15).
     Poisson,
+    /// The no-slip of the Newton-Euler bodies restored after the diffusion, with their recoil
+    /// (`systems/noslip.rs`).
+    NoSlip,
     /// The free surface carried by the new velocity, redistanced, its volume restored
     /// (section 5).
     FreeSurface,
@@ -82,7 +85,7 @@ pub enum PhysicsSet {
 
 impl PhysicsSet {
     /// Every set, in schedule order.
-    pub const ALL: [PhysicsSet; 17] = [
+    pub const ALL: [PhysicsSet; 18] = [
         PhysicsSet::First,
         PhysicsSet::LevelSets,
         PhysicsSet::PhaseDensity,
@@ -95,6 +98,7 @@ impl PhysicsSet {
         PhysicsSet::Transport,
         PhysicsSet::Diffusion,
         PhysicsSet::Poisson,
+        PhysicsSet::NoSlip,
         PhysicsSet::FreeSurface,
         PhysicsSet::FreeMotion,
         PhysicsSet::RigidUpdate,

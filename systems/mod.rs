@@ -20,6 +20,7 @@ pub mod diffusion;
 pub mod free_motion;
 pub mod free_surface;
 pub mod level_sets;
+pub mod noslip;
 pub mod penalization;
 pub mod poisson;
 pub mod pressure;
@@ -44,6 +45,7 @@ pub fn builtin() -> Vec<Box<dyn Plugin>> {
         Box::new(transport::TransportPlugin),
         Box::new(diffusion::DiffusionPlugin),
         Box::new(poisson::PoissonPlugin),
+        Box::new(noslip::NoSlipPlugin),
         Box::new(free_motion::FreeMotionPlugin),
         Box::new(rigid_update::RigidUpdatePlugin),
         Box::new(diagnostics::DiagnosticsPlugin),

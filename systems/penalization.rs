@@ -24,13 +24,17 @@
 //! at 25.6 cells, first order; with δ = ε it is 2.098 and 2.090 (Dennis & Chang: 2.05
 //! unbounded; this box has 5% blockage). Dynamic bodies keep δ = 0: with the mask moved
 //! inside, a settling sphere fell 20-50% too fast (d = 0.3, ν = 0.02 at h = 1/32: 1.69 against
-//! 1.51, even with the body's extra mass moved into the mask), so their rigid region stays
-//! the whole smoothed band, the same χ as their density and mass.
+//! 1.51, even with the body's extra mass moved into the mask), so the rigid region of a body
+//! that stays with the projection is the whole smoothed band, the same χ as its density and
+//! mass. A body that moves by Newton-Euler is set to its rigid velocity exactly on the nodes
+//! inside its surface (φ > 0), the region its mean and its no-slip use
+//! (`systems/noslip.rs`), with its mass from its exact volume.
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, component_ptrs};
 use crate::base::params::BodyCoupling;
-use crate::bodies::integrals::BodySums;
+use crate::bodies::coupling::MotionLaw;
+use crate::bodies::integrals::{BodySums, rigid_region};
 use crate::bodies::{Body, BodyFields, GridPatch, Hydro, RigidState};
 use crate::solvers::operators::curl_add;
 use bevy_ecs::prelude::*;
@@ -46,7 +50,7 @@ pub fn penalization(
     mut fields: ResMut<Fields>,
     mut bf: ResMut<BodyFields>,
     mut sums: ResMut<BodySums>,
-    mut bodies: Query<(&Body, &GridPatch, &RigidState, &mut Hydro)>,
+    mut bodies: Query<(&Body, &GridPatch, &RigidState, &MotionLaw, &mut Hydro)>,
 ) {
     let dt = time.dt;
     let ldt = params.numerics.lambda * dt;
@@ -70,11 +74,14 @@ pub fn penalization(
     // Moving bodies first, static ones last: where a body overlaps a wall, the wall wins and
     // the fluid there is at rest, which is what stops a body at a wall.
     for pass_static in [false, true] {
-        for (body, patch, state, mut hydro) in &mut bodies {
+        for (body, patch, state, law, mut hydro) in &mut bodies {
             if body.is_static() != pass_static {
                 continue;
             }
             let dynamic = body.is_dynamic();
+            // A Newton-Euler body's rigid region is the nodes inside its surface, set to its
+            // rigid velocity exactly (the weight of its mean and its no-slip).
+            let newton = dynamic && pressure && *law == MotionLaw::NewtonEuler;
             // With the momentum coupling a dynamic body's force is the fluid's share of its
             // momentum balance, reported by `rigid_velocity`.
             let own_force = !(dynamic && (momentum || pressure));
@@ -99,7 +106,13 @@ pub fn penalization(
                     let mut m = DVec3::ZERO;
                     for a in 0..dx {
                         let (cv, phi) = (patch.chi[r * dx + a], patch.phi[r * dx + a]);
-                        let chi = if dynamic { cv } else { mask.apply(cv, phi) };
+                        let chi = if newton {
+                            rigid_region(phi)
+                        } else if dynamic {
+                            cv
+                        } else {
+                            mask.apply(cv, phi)
+                        };
                         if chi == 0.0 {
                             continue;
                         }
@@ -113,7 +126,11 @@ pub fn penalization(
                             // SAFETY: distinct patch rows map to distinct grid nodes.
                             unsafe {
                                 let old = u[q].read(g);
-                                let new = (old + ldt * chi * ubar[q]) / (1.0 + ldt * chi);
+                                let new = if newton {
+                                    ubar[q]
+                                } else {
+                                    (old + ldt * chi * ubar[q]) / (1.0 + ldt * chi)
+                                };
                                 u[q].write(g, new);
                                 du[q].write(g, du[q].read(g) + new - old);
                                 change[q] = new - old;

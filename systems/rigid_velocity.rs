@@ -58,8 +58,12 @@ use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::BodyCoupling;
 use crate::bodies::coupling::{MotionLaw, PressureState};
-use crate::bodies::integrals::{BodySums, integrate_n, mass_properties, penalized_weight};
-use crate::bodies::{Body, BodyFields, GridPatch, Hydro, Material, RigidState, kinematic_velocity};
+use crate::bodies::integrals::{
+    BodySums, integrate_n, mass_properties, penalized_weight, rigid_region,
+};
+use crate::bodies::{
+    Body, BodyFields, GridPatch, Hydro, Material, RigidState, ShapeVolume, kinematic_velocity,
+};
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 
@@ -77,6 +81,7 @@ pub fn rigid_velocity(
         &GridPatch,
         &Material,
         &MotionLaw,
+        &ShapeVolume,
         &mut RigidState,
         &mut Hydro,
     )>,
@@ -96,7 +101,7 @@ pub fn rigid_velocity(
         _ => None,
     };
     let g = DVec3::from_array(params.gravity);
-    for (body, patch, mat, law, mut state, mut hydro) in &mut bodies {
+    for (body, patch, mat, law, shape_volume, mut state, mut hydro) in &mut bodies {
         if body.is_static() {
             state.velocity = DVec3::ZERO;
             state.angular_velocity = DVec3::ZERO;
@@ -113,7 +118,16 @@ pub fn rigid_velocity(
         // small but λΔtχ ≫ 1, is dragged along at ū every step: momentum from nothing that
         // made a settling sphere fall ~50% too fast.)
         let ldt = params.numerics.lambda * time.dt;
-        let weight = |c: f64| penalized_weight(ldt, c);
+        // A Newton-Euler body's rigid region is the nodes inside its surface, wholly (the one
+        // weight of its penalization and its no-slip, `systems/noslip.rs`).
+        let newton = pressure && *law == MotionLaw::NewtonEuler;
+        let weight = |c: f64, phi: f64| {
+            if newton {
+                rigid_region(phi)
+            } else {
+                penalized_weight(ldt, c)
+            }
+        };
         let parts = excess.and_then(|x| x.get(body.id).copied().flatten());
         // All of the body's integrals in one pass over its patch:
         // - χ: its volume, centroid and inertia (`mass_properties`);
@@ -130,10 +144,10 @@ pub fn rigid_velocity(
             state.center,
             &fields.u,
             &mut sums,
-            |c, _, g| {
+            |c, phi, g| {
                 let excess = |sign: f64| {
                     if parts.is_some() {
-                        sign * (sign * (rho[g] - phase[g])).max(0.0) * weight(c)
+                        sign * (sign * (rho[g] - phase[g])).max(0.0) * weight(c, phi)
                     } else {
                         0.0
                     }
@@ -141,9 +155,9 @@ pub fn rigid_velocity(
                 [
                     c,
                     if pressure {
-                        rho[g] * weight(c)
+                        rho[g] * weight(c, phi)
                     } else {
-                        weight(c)
+                        weight(c, phi)
                     },
                     excess(1.0),
                     excess(-1.0),
@@ -188,7 +202,13 @@ pub fn rigid_velocity(
         // Under the pressure projection, E, the body's mass beyond the fluid it displaces, and
         // the impulse of its weight over this step (`weight`), on the rigid region's mass wvol
         // (`kick`).
-        let e = mat.density * state.volume - displaced.0;
+        // A Newton-Euler body's takes the exact volume of its shape: ∫χ is larger by the
+        // smoothing (0.39 (ε/a)² of a sphere's volume, 3.8% at 3.2 cells per radius).
+        let e = if newton && shape_volume.0 > 0.0 {
+            (mat.density - displaced.0 / state.volume) * shape_volume.0
+        } else {
+            mat.density * state.volume - displaced.0
+        };
         let weight = e * g * time.dt;
         let kick = if pressure { weight / wvol } else { DVec3::ZERO };
         // Its moment about the rigid region's centroid over the step: the weight acts at the
@@ -203,7 +223,7 @@ pub fn rigid_velocity(
             DVec3::ZERO
         };
         let first = fields.dt_prev <= 0.0;
-        if pressure && *law == MotionLaw::NewtonEuler {
+        if newton {
             // The projection carried the rigid region as fluid of the phases' density: its
             // mass is M_w = wvol, its momentum and angular momentum `mom`, `ang` (about the
             // centroid of ρw); the body's inertia beyond the displaced fluid's is e_rho J_i

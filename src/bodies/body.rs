@@ -114,6 +114,15 @@ pub struct Material {
     pub density: f64,
 }
 
+/// The exact volume (area in 2D) of a body's solid, from its shape ([`ShapeGeometry::volume`];
+/// 0 for an unbounded one). The grid's χ integrates to more (the smoothed step adds about
+/// 0.39 (ε/a)² of a sphere's volume), so the mass of a body that moves by Newton-Euler is taken
+/// from this.
+///
+/// [`ShapeGeometry::volume`]: crate::bodies::shapes::ShapeGeometry::volume
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct ShapeVolume(pub f64);
+
 /// The reference signed distance of a body, in body coordinates.
 #[derive(Component, Debug, Clone)]
 pub struct BodyShape {

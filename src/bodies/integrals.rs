@@ -38,6 +38,14 @@ pub fn penalized_weight(ldt: f64, chi: f64) -> f64 {
     ldt * chi / (1.0 + ldt * chi)
 }
 
+/// The rigid region of a body that moves by Newton-Euler (`systems/noslip.rs`): the nodes
+/// inside its surface, φ > 0, each wholly (weight 1). Its penalization, its rigid velocity's
+/// mean and its no-slip use this one weight, whatever the smoothing band.
+#[inline]
+pub fn rigid_region(phi: f64) -> f64 {
+    if phi > 0.0 { 1.0 } else { 0.0 }
+}
+
 /// The integrals of one weight over a patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
 /// measured from the centroid.
 pub type Moments = (f64, DVec3, DVec3, DVec3, DMat3);

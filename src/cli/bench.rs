@@ -61,6 +61,8 @@ fn measure(
     // Iterations of the variable-density pressure solve per timed step (when it runs).
     let mut iterations = Vec::new();
     let mut preconditioners = Vec::new();
+    // Iterations of the no-slip solve per timed step (when it runs).
+    let mut noslip = Vec::new();
     for _ in 0..steps {
         let t0 = std::time::Instant::now();
         sim.step()?;
@@ -74,6 +76,9 @@ fn measure(
             if !preconditioners.contains(&name) {
                 preconditioners.push(name);
             }
+        }
+        if let Some(n) = sim.world.get_resource::<crate::systems::noslip::NoSlip>() {
+            noslip.push(n.iterations as f64);
         }
         for &(n, s) in &sim.timings().last {
             match per.iter_mut().find(|e| e.0 == n) {
@@ -117,6 +122,9 @@ fn measure(
     if !iterations.is_empty() {
         line["median_pressure_iterations"] = serde_json::json!(median_p90(&mut iterations).0);
         line["pressure_preconditioners"] = serde_json::json!(preconditioners);
+    }
+    if !noslip.is_empty() {
+        line["median_noslip_iterations"] = serde_json::json!(median_p90(&mut noslip).0);
     }
     Ok(line.to_string())
 }

@@ -8,7 +8,7 @@ use crate::bodies::coupling::{MotionLaw, motion_law};
 use crate::bodies::levelset::LocalLevelSet;
 use crate::bodies::{
     Body, BodyKind, BodyShape, BodySurface, ContactPoints, ContactState, FreeMotion, GridPatch,
-    Hydro, Material, PreviousVelocity, RigidState, angular3, band, vec3,
+    Hydro, Material, PreviousVelocity, RigidState, ShapeVolume, angular3, band, vec3,
 };
 use crate::scene::ValidScene;
 use bevy_ecs::prelude::*;
@@ -93,6 +93,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
                 inertia: DMat3::ZERO,
             },
             Material { density },
+            ShapeVolume(geom.volume().unwrap_or(0.0)),
             law,
             BodyShape { level_set },
             patch,

@@ -85,6 +85,9 @@ pub struct Spectral {
     /// Per row of the spectrum: the kinetic energy the last damped diffusion removed (summed
     /// in row order afterwards, so the total does not depend on the thread count).
     removed_rows: Vec<f64>,
+    /// Spectrum of the last forcing response, one buffer per velocity component (empty until
+    /// [`Spectral::reserve_forcing`]).
+    force_hat: Vec<Vec<C64>>,
 }
 
 /// The damping of the top of the spectrum that [`Spectral::diffuse`] applies with the
@@ -125,7 +128,136 @@ impl Spectral {
             cached: None,
             k_nyquist: std::f64::consts::PI / grid.h,
             removed_rows: vec![0.0; clen / nxh],
+            force_hat: Vec::new(),
         }
+    }
+
+    /// Allocates the buffers of [`Spectral::forcing_velocity`] (once, before the first step).
+    pub fn reserve_forcing(&mut self) {
+        if self.force_hat.len() != self.dim {
+            let clen = self.fft.complex_len();
+            self.force_hat = (0..self.dim).map(|_| vec![C64::default(); clen]).collect();
+        }
+    }
+
+    /// The velocity a force field makes within an implicit diffusion step: u = BS(∇×(m R f)),
+    /// with R = (1 + νΔt|k|²)⁻¹ the diffusion's resolvent, m(k) = k·k̃ / |k|² (k̃ = sin(k h)/h)
+    /// the transfer function of the centred curl through which the penalization's forcing
+    /// enters the vorticity (eq. 27), against the spectral curl, and ∇× and BS (the velocity
+    /// from the vorticity, [`Spectral::velocity`]) spectral: û = (|k|² f̂ - k (k·f̂)) m R / |k|²
+    /// (k with the Nyquist wavenumber zeroed in the numerators, as in `velocity`). Each factor
+    /// is symmetric positive and they commute, so f ↦ u is symmetric positive semi-definite
+    /// (conjugate gradients apply: `systems/noslip.rs`). The mean (k = 0) is dropped: in the
+    /// periodic box the mean flow is the background's. `f` and `u` have `dim` components; m R f̂
+    /// is kept for [`Spectral::forcing_vorticity_add`].
+    ///
+    /// Panics if [`Spectral::reserve_forcing`] was not called or a shape is wrong.
+    pub fn forcing_velocity(&mut self, f: &[Vec<f64>], nu_dt: f64, u: &mut [Vec<f64>]) {
+        assert_eq!(
+            self.force_hat.len(),
+            self.dim,
+            "spectral: reserve_forcing first"
+        );
+        self.check_field(f, self.dim, "forcing");
+        self.check_field(u, self.dim, "velocity");
+        for (fc, fh) in f.iter().zip(self.force_hat.iter_mut()) {
+            self.fft.forward(fc, fh);
+        }
+        let ([_, ny, _], nxh) = self.fft.dims();
+        let [kx, ky, kz] = &self.tab.k;
+        let h = std::f64::consts::PI / self.k_nyquist;
+        let scale = |i: usize, j: usize, k: usize| {
+            let k2 = kx[i] * kx[i] + ky[j] * ky[j] + kz[k] * kz[k];
+            if k2 == 0.0 {
+                return 0.0;
+            }
+            let m =
+                (kx[i] * (kx[i] * h).sin() + ky[j] * (ky[j] * h).sin() + kz[k] * (kz[k] * h).sin())
+                    / (h * k2);
+            m / (1.0 + nu_dt * k2)
+        };
+        for fh in self.force_hat.iter_mut() {
+            fh.par_chunks_mut(nxh).enumerate().for_each(|(r, row)| {
+                let (j, k) = (r % ny, r / ny);
+                for (i, z) in row.iter_mut().enumerate() {
+                    *z *= scale(i, j, k);
+                }
+            });
+        }
+        let [dx, dy, dz] = &self.tab.kd;
+        for (c, uc) in u.iter_mut().enumerate() {
+            let fh = &self.force_hat;
+            self.work
+                .par_chunks_mut(nxh)
+                .enumerate()
+                .for_each(|(r, row)| {
+                    let (j, k) = (r % ny, r / ny);
+                    let off = r * nxh;
+                    for i in 0..nxh {
+                        let k2 = kx[i] * kx[i] + ky[j] * ky[j] + kz[k] * kz[k];
+                        if k2 == 0.0 {
+                            row[i] = C64::default();
+                            continue;
+                        }
+                        let kv = [dx[i], dy[j], dz[k]];
+                        let mut kf = C64::default();
+                        let mut kk = 0.0;
+                        for (q, fq) in fh.iter().enumerate() {
+                            kf += fq[off + i] * kv[q];
+                            kk += kv[q] * kv[q];
+                        }
+                        row[i] = (fh[c][off + i] * kk - kf * kv[c]) / k2;
+                    }
+                });
+            self.fft.inverse(None, &mut self.work, uc);
+        }
+    }
+
+    /// ω += ∇×(m R f) for the force f of the last [`Spectral::forcing_velocity`] (spectral
+    /// curl), whose velocity is the u it returned: the velocity of the new vorticity is the old
+    /// one's plus u exactly. `scratch` is one real field. Forgets the cached vorticity spectrum.
+    pub fn forcing_vorticity_add(&mut self, omega: &mut [Vec<f64>], scratch: &mut [f64]) {
+        assert_eq!(
+            self.force_hat.len(),
+            self.dim,
+            "spectral: reserve_forcing first"
+        );
+        self.check_field(omega, self.omega_hat.len(), "omega");
+        let ([_, ny, _], nxh) = self.fft.dims();
+        let [dx, dy, dz] = &self.tab.kd;
+        let i_ = |v: C64| C64::new(-v.im, v.re);
+        for (c, oc) in omega.iter_mut().enumerate() {
+            let fh = &self.force_hat;
+            let comp = if self.dim == 2 { 2 } else { c };
+            self.work
+                .par_chunks_mut(nxh)
+                .enumerate()
+                .for_each(|(r, row)| {
+                    let (j, k) = (r % ny, r / ny);
+                    let off = r * nxh;
+                    for i in 0..nxh {
+                        let (p, q, t) = (dx[i], dy[j], dz[k]);
+                        let a = fh[0][off + i];
+                        let b = fh[1][off + i];
+                        let d = if fh.len() == 3 {
+                            fh[2][off + i]
+                        } else {
+                            C64::default()
+                        };
+                        // (i k × u)_comp
+                        row[i] = i_(match comp {
+                            0 => d * q - b * t,
+                            1 => a * t - d * p,
+                            _ => b * p - a * q,
+                        });
+                    }
+                });
+            self.fft.inverse(None, &mut self.work, scratch);
+            oc.par_iter_mut()
+                .zip(scratch.par_iter())
+                .for_each(|(o, s)| *o += s);
+        }
+        self.cached = None;
     }
 
     /// Number of complex coefficients of one real field: `(nx/2 + 1) * ny * nz`.

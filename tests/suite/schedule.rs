@@ -175,6 +175,7 @@ const STEP_ORDER: &[&str] = &[
     "transport",
     "diffusion",
     "poisson",
+    "noslip",
     "free_surface",
     "free_motion",
     "rigid_update",
@@ -223,7 +224,7 @@ fn built_in_systems_run_in_the_stated_order() {
     let expected: Vec<&str> = STEP_ORDER
         .iter()
         .copied()
-        .filter(|n| !["baroclinic", "free_motion"].contains(n))
+        .filter(|n| !["baroclinic", "free_motion", "noslip"].contains(n))
         .collect();
     assert_eq!(ran(&s), expected, "a step with bodies under a free surface");
 }

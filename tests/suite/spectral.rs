@@ -744,3 +744,72 @@ fn timing_128_cubed() {
         median(step)
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// The no-slip's forcing response (systems/noslip.rs)
+
+fn dot(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>())
+        .sum()
+}
+
+/// f ↦ u = BS(∇×(m R f)) is symmetric and positive semi-definite (conjugate gradients rely on
+/// it): ⟨a, K b⟩ = ⟨K a, b⟩ and ⟨a, K a⟩ ≥ 0 to round-off, for random fields in 2D and 3D on
+/// grids of odd and even sizes.
+#[test]
+fn forcing_response_is_symmetric_positive() {
+    for (n, dim) in [([12, 10, 8], 3), ([9, 8, 11], 3), ([16, 14, 1], 2)] {
+        let grid = Grid::new(n, 0.1, [0.0; 3]);
+        let mut s = Spectral::new(&grid);
+        s.reserve_forcing();
+        let mut rng = Rng(7);
+        let a: Vec<Vec<f64>> = (0..dim).map(|_| rng.field(grid.len())).collect();
+        let b: Vec<Vec<f64>> = (0..dim).map(|_| rng.field(grid.len())).collect();
+        let mut ka = vec![vec![0.0; grid.len()]; dim];
+        let mut kb = ka.clone();
+        s.forcing_velocity(&a, 0.003, &mut ka);
+        s.forcing_velocity(&b, 0.003, &mut kb);
+        let (ab, ba) = (dot(&a, &kb), dot(&ka, &b));
+        let scale = dot(&a, &a).sqrt() * dot(&kb, &kb).sqrt();
+        assert!((ab - ba).abs() < 1e-12 * scale, "{n:?}: {ab} against {ba}");
+        let aa = dot(&a, &ka);
+        assert!(aa > 0.0, "{n:?}: <a, K a> = {aa}");
+    }
+}
+
+/// The vorticity the forcing adds carries exactly the velocity it returned: the velocity of
+/// ω + Δω is that of ω plus u, to round-off (2D and 3D).
+#[test]
+fn forcing_vorticity_carries_the_forcing_velocity() {
+    for (n, dim) in [([12, 10, 8], 3), ([16, 14, 1], 2)] {
+        let grid = Grid::new(n, 0.1, [0.0; 3]);
+        let mut s = Spectral::new(&grid);
+        s.reserve_forcing();
+        let mut rng = Rng(11);
+        let ncomp = if dim == 3 { 3 } else { 1 };
+        let f: Vec<Vec<f64>> = (0..dim).map(|_| rng.field(grid.len())).collect();
+        // A divergence-free vorticity (the curl of a random velocity, spectrally).
+        let mut omega = vec![vec![0.0; grid.len()]; ncomp];
+        let mut w0 = f.clone();
+        s.forcing_velocity(&f, 0.0, &mut w0);
+        s.forcing_vorticity_add(&mut omega, &mut vec![0.0; grid.len()]);
+        let mut u0 = vec![vec![0.0; grid.len()]; dim];
+        s.velocity(&mut omega, 1, [0.0; 3], &mut u0);
+        let mut du = vec![vec![0.0; grid.len()]; dim];
+        s.forcing_velocity(&f, 0.002, &mut du);
+        s.forcing_vorticity_add(&mut omega, &mut vec![0.0; grid.len()]);
+        let mut u1 = vec![vec![0.0; grid.len()]; dim];
+        s.velocity(&mut omega, 2, [0.0; 3], &mut u1);
+        let top = du.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        for q in 0..dim {
+            let expect: Vec<f64> = u0[q].iter().zip(&du[q]).map(|(a, b)| a + b).collect();
+            assert!(
+                max_diff(&u1[q], &expect) < 1e-12 * top.max(1.0),
+                "{n:?} component {q}: {}",
+                max_diff(&u1[q], &expect)
+            );
+        }
+    }
+}

@@ -48,12 +48,6 @@ pub const CASE: Case = Case {
             full: true,
             why: "+2.3% (+1.5% at h = 1/32); issue 35",
         },
-        KnownFailure {
-            row: "h = 1/32, density 2: (max - min) / min of U over diffusion numbers",
-            quick: true,
-            full: true,
-            why: "U / U_Hasimoto = 0.833, 0.998, 1.516 at diffusion numbers 0.125, 0.5, 2: the no-slip is imposed once per step and the implicit diffusion softens it in between (measured with the Newton-Euler motion of heavy bodies); issue 35",
-        },
     ],
 };
 
