@@ -33,7 +33,7 @@
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::bodies::coupling::MotionLaw;
-use crate::bodies::integrals::{BodySums, integrate_n, rigid_region};
+use crate::bodies::integrals::rigid_region;
 use crate::bodies::{Body, GridPatch, Hydro, Material, RigidState, ShapeVolume};
 use crate::solvers::Spectral;
 use bevy_ecs::prelude::*;
@@ -47,29 +47,36 @@ use rayon::prelude::*;
 pub const TOLERANCE: f64 = 1e-2;
 
 /// At most this many iterations a step. A sphere at 3.2 cells per radius and ν Δt / h² of
-/// 0.125 to 2 needs 5 to 8; at ν Δt / h² well below 1 (dkt: 0.2) the slip the diffusion
-/// leaves is a grid-scale layer, which the operator transmits weakly (m → 0 at the Nyquist
-/// wavenumber), and the force increments keep oscillating at 2-10% of the force for 20
-/// iterations while the force itself stays within 3% after the fourth.
-pub const MAX_ITERATIONS: usize = 8;
+/// 0.125 to 2 needs 5 to 8 to meet [`TOLERANCE`]; stopped at 6 it settles at 0.988 / 0.992 /
+/// 0.996 of Hasimoto at diffusion numbers 0.125 / 0.5 / 2 (0.988 / 0.990 / 0.993 at 8). At
+/// ν Δt / h² well below 1 (dkt: 0.2) the slip the diffusion leaves is a grid-scale layer, which
+/// the operator transmits weakly (m → 0 at the Nyquist wavenumber): the force increments keep
+/// oscillating at 2-10% of the force for 20 iterations while the force itself stays within 3%
+/// after the fourth. Each iteration costs about 1.7 FFT floors (3 forward and 3 inverse
+/// transforms and the spectral passes).
+pub const MAX_ITERATIONS: usize = 6;
 
-/// The solver's scratch (allocated once) and its last iteration count.
+/// The solver's scratch (allocated once) and its last iteration count. The unknowns live on
+/// the rigid regions' nodes only (a compact list); the transforms see them scattered on the
+/// grid.
 #[derive(Resource, Debug, Clone, Default)]
 pub struct NoSlip {
-    /// 1 on the rigid regions of the Newton-Euler bodies, 0 elsewhere.
-    mask: Vec<f64>,
-    /// The force (velocity units: the velocity it would give per step before K).
-    x: Vec<Vec<f64>>,
-    /// Residual W (ū - u - K x) with the bodies' recoil.
-    r: Vec<Vec<f64>>,
-    /// Search direction.
-    p: Vec<Vec<f64>>,
-    /// K p, then the operator applied to p.
-    kp: Vec<Vec<f64>>,
+    /// Whether a node is already in the list (reset after each solve).
+    taken: Vec<bool>,
+    /// The rigid regions' nodes, body after body: grid index, position from the body's
+    /// centroid.
+    nodes: Vec<(usize, DVec3)>,
+    /// On the nodes: the force (velocity units), the residual W(ū - u - K x) with the bodies'
+    /// recoil, the search direction and the operator applied to it.
+    x: Vec<DVec3>,
+    r: Vec<DVec3>,
+    p: Vec<DVec3>,
+    ap: Vec<DVec3>,
+    /// The search direction scattered on the grid (zero off the nodes), and K of it.
+    p_grid: Vec<Vec<f64>>,
+    kp_grid: Vec<Vec<f64>>,
     /// One real field for the vorticity of the forcing.
     scratch: Vec<f64>,
-    /// Per grid row partial sums (in row order: the result does not depend on the threads).
-    rows: Vec<f64>,
     /// The Newton-Euler bodies of this step.
     bodies: Vec<Recoil>,
     /// Iterations of the last solve (0 when it did not run).
@@ -80,6 +87,8 @@ pub struct NoSlip {
 #[derive(Debug, Clone, Copy)]
 struct Recoil {
     entity: Entity,
+    /// Its nodes in [`NoSlip::nodes`].
+    range: (usize, usize),
     /// ρ_F / E.
     inv_e: f64,
     /// ρ_F J_E⁻¹.
@@ -105,45 +114,24 @@ impl NoSlip {
         let n = grid.len();
         let field = || vec![vec![0.0; n]; grid.dim];
         NoSlip {
-            mask: vec![0.0; n],
-            x: field(),
-            r: field(),
-            p: field(),
-            kp: field(),
+            taken: vec![false; n],
+            nodes: Vec::with_capacity(n),
+            x: Vec::with_capacity(n),
+            r: Vec::with_capacity(n),
+            p: Vec::with_capacity(n),
+            ap: Vec::with_capacity(n),
+            p_grid: field(),
+            kp_grid: field(),
             scratch: vec![0.0; n],
-            rows: vec![0.0; n / grid.n[0]],
             bodies: Vec::new(),
             iterations: 0,
         }
     }
 }
 
-/// Σ a·b over the nodes, summed per grid row in parallel and the rows in order.
-fn dot(rows: &mut [f64], nx: usize, a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
-    rows.par_iter_mut().enumerate().for_each(|(row, s)| {
-        let range = row * nx..(row + 1) * nx;
-        *s = a
-            .iter()
-            .zip(b)
-            .map(|(ac, bc)| {
-                ac[range.clone()]
-                    .iter()
-                    .zip(&bc[range.clone()])
-                    .map(|(x, y)| x * y)
-                    .sum::<f64>()
-            })
-            .sum();
-    });
-    rows.iter().sum()
-}
-
-/// y += a x on every component.
-fn axpy(y: &mut [Vec<f64>], a: f64, x: &[Vec<f64>]) {
-    for (yc, xc) in y.iter_mut().zip(x) {
-        yc.par_iter_mut()
-            .zip(xc.par_iter())
-            .for_each(|(y, x)| *y += a * x);
-    }
+/// Σ a·b over the nodes (in order: the result does not depend on the threads).
+fn dot(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum()
 }
 
 type NewtonBodies<'w, 's> = Query<
@@ -169,7 +157,6 @@ pub fn noslip(
     time: Res<SimTime>,
     mut fields: ResMut<Fields>,
     mut spectral: ResMut<Spectral>,
-    mut sums: ResMut<BodySums>,
     mut ns: ResMut<NoSlip>,
     mut bodies: NewtonBodies,
 ) {
@@ -177,26 +164,16 @@ pub fn noslip(
     ns.iterations = 0;
     let rho_f = params.rho_fluid;
     let dim = grid.dim;
-    let nx = grid.n[0];
+    let dv = grid.cell_volume();
     ns.bodies.clear();
-    let newton = |law: &MotionLaw, body: &Body, patch: &GridPatch| {
-        *law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()
-    };
-    if !bodies
-        .iter()
-        .any(|(_, body, patch, _, law, ..)| newton(law, body, patch))
-    {
-        return;
-    }
-    ns.mask.par_iter_mut().for_each(|m| *m = 0.0);
-    for c in ns.r.iter_mut().chain(ns.x.iter_mut()) {
-        c.par_iter_mut().for_each(|v| *v = 0.0);
-    }
+    ns.nodes.clear();
+    ns.r.clear();
     // The rigid regions, the slip there, and each body's recoil.
     for (entity, body, patch, state, law, mat, volume, hydro) in &bodies {
-        if !newton(law, body, patch) {
+        if !(*law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()) {
             continue;
         }
+        let start = ns.nodes.len();
         let [dx, dy, _] = patch.dims;
         for row in 0..patch.len() / dx {
             let (b, c) = (row % dy, row / dy);
@@ -206,13 +183,19 @@ pub fn noslip(
                 }
                 let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
                 let g = grid.idx(i, j, k);
+                if ns.taken[g] {
+                    continue;
+                }
+                ns.taken[g] = true;
                 let pos = grid.pos(i, j, k);
                 let rv = DVec3::new(pos[0], pos[1], pos[2]) - state.centroid;
                 let ubar = state.velocity + state.angular_velocity.cross(rv);
-                ns.mask[g] = 1.0;
+                let mut u = DVec3::ZERO;
                 for q in 0..dim {
-                    ns.r[q][g] = ubar[q] - fields.u[q][g];
+                    u[q] = fields.u[q][g];
                 }
+                ns.nodes.push((g, rv));
+                ns.r.push(ubar - u);
             }
         }
         let e = (mat.density - rho_f) * volume.0;
@@ -235,6 +218,7 @@ pub fn noslip(
             / state.volume.max(f64::MIN_POSITIVE).sqrt();
         ns.bodies.push(Recoil {
             entity,
+            range: (start, ns.nodes.len()),
             inv_e: if e != 0.0 { rho_f / e } else { 0.0 },
             inv_j,
             p_force: DVec3::ZERO,
@@ -246,52 +230,64 @@ pub fn noslip(
             angular_impulse: hydro.torque * time.dt,
         });
     }
-    let nu_dt = params.nu * time.dt;
-    for (pc, rc) in ns.p.iter_mut().zip(&ns.r) {
-        pc.copy_from_slice(rc);
+    if ns.nodes.is_empty() {
+        return;
     }
-    let mut rr = dot(&mut ns.rows, nx, &ns.r, &ns.r);
+    let m = ns.nodes.len();
+    ns.x.clear();
+    ns.x.resize(m, DVec3::ZERO);
+    ns.p.clear();
+    ns.p.extend_from_slice(&ns.r);
+    ns.ap.clear();
+    ns.ap.resize(m, DVec3::ZERO);
+    for c in ns.p_grid.iter_mut() {
+        c.par_iter_mut().for_each(|v| *v = 0.0);
+    }
+    let nu_dt = params.nu * time.dt;
+    let mut rr = dot(&ns.r, &ns.r);
     for it in 0..MAX_ITERATIONS {
         if rr <= 0.0 {
             break;
         }
-        // kp = W K p + W B M_E⁻¹ B^T p (p is zero outside W).
-        spectral.forcing_velocity(&ns.p, nu_dt, &mut ns.kp);
-        for kc in ns.kp.iter_mut() {
-            kc.par_iter_mut()
-                .zip(ns.mask.par_iter())
-                .for_each(|(k, m)| *k *= m);
+        // ap = W K p + W B M_E⁻¹ B^T p.
+        for (&(g, _), p) in ns.nodes.iter().zip(&ns.p) {
+            for q in 0..dim {
+                ns.p_grid[q][g] = p[q];
+            }
+        }
+        spectral.forcing_velocity(&ns.p_grid, nu_dt, &mut ns.kp_grid);
+        for (&(g, _), ap) in ns.nodes.iter().zip(ns.ap.iter_mut()) {
+            let mut v = DVec3::ZERO;
+            for q in 0..dim {
+                v[q] = ns.kp_grid[q][g];
+            }
+            *ap = v;
         }
         for rec in ns.bodies.iter_mut() {
-            let Ok((_, _, patch, state, ..)) = bodies.get(rec.entity) else {
-                continue;
-            };
-            // Σ p h^d and Σ r × p h^d over the region (about its centroid, the body's).
-            let [m] = integrate_n::<1>(
-                &grid,
-                patch,
-                state.centroid,
-                &ns.p,
-                &mut sums,
-                |_, phi, _| [rigid_region(phi)],
-            );
-            (rec.p_force, rec.p_torque) = (m.2, m.3);
-            add_rigid(
-                &grid,
-                patch,
-                m.1,
-                m.2 * rec.inv_e,
-                rec.inv_j * m.3,
-                &mut ns.kp,
-            );
+            let (lo, hi) = rec.range;
+            let (mut pf, mut pl) = (DVec3::ZERO, DVec3::ZERO);
+            for (&(_, rv), p) in ns.nodes[lo..hi].iter().zip(&ns.p[lo..hi]) {
+                pf += *p * dv;
+                pl += rv.cross(*p * dv);
+            }
+            (rec.p_force, rec.p_torque) = (pf, pl);
+            let (dvel, dspin) = (pf * rec.inv_e, rec.inv_j * pl);
+            for (&(_, rv), ap) in ns.nodes[lo..hi].iter().zip(&mut ns.ap[lo..hi]) {
+                let add = dvel + dspin.cross(rv);
+                for q in 0..dim {
+                    ap[q] += add[q];
+                }
+            }
         }
-        let pkp = dot(&mut ns.rows, nx, &ns.p, &ns.kp);
-        if pkp <= 0.0 {
+        let pap = dot(&ns.p, &ns.ap);
+        if pap <= 0.0 {
             break;
         }
-        let alpha = rr / pkp;
-        axpy(&mut ns.x, alpha, &ns.p);
-        axpy(&mut ns.r, -alpha, &ns.kp);
+        let alpha = rr / pap;
+        for l in 0..m {
+            ns.x[l] += alpha * ns.p[l];
+            ns.r[l] -= alpha * ns.ap[l];
+        }
         ns.iterations = it + 1;
         // The bodies' force (the momentum the fluid takes, ρ_F Σ x h^d) and its increment.
         let (mut df, mut f) = (0.0, 0.0);
@@ -309,22 +305,32 @@ pub fn noslip(
         if df <= TOLERANCE * f {
             break;
         }
-        let rr_new = dot(&mut ns.rows, nx, &ns.r, &ns.r);
+        let rr_new = dot(&ns.r, &ns.r);
         let beta = rr_new / rr;
         rr = rr_new;
-        for (pc, rc) in ns.p.iter_mut().zip(&ns.r) {
-            pc.par_iter_mut()
-                .zip(rc.par_iter())
-                .for_each(|(p, r)| *p = r + beta * *p);
+        for l in 0..m {
+            ns.p[l] = ns.r[l] + beta * ns.p[l];
         }
+    }
+    for &(g, _) in &ns.nodes {
+        ns.taken[g] = false;
     }
     if ns.iterations == 0 {
         return;
     }
     // The flow takes K x; the bodies the reaction.
-    spectral.forcing_velocity(&ns.x, nu_dt, &mut ns.kp);
+    for (&(g, _), x) in ns.nodes.iter().zip(&ns.x) {
+        for q in 0..dim {
+            ns.p_grid[q][g] = x[q];
+        }
+    }
+    spectral.forcing_velocity(&ns.p_grid, nu_dt, &mut ns.kp_grid);
     let (omega, u, _) = fields.next_version_parts();
-    axpy(u, 1.0, &ns.kp);
+    for (uc, kc) in u.iter_mut().zip(&ns.kp_grid) {
+        uc.par_iter_mut()
+            .zip(kc.par_iter())
+            .for_each(|(u, k)| *u += k);
+    }
     spectral.forcing_vorticity_add(omega, &mut ns.scratch);
     let dt = time.dt;
     for rec in &ns.bodies {
@@ -336,33 +342,6 @@ pub fn noslip(
         state.angular_velocity -= rec.inv_j * rec.torque / rho_f;
         hydro.force -= rec.force / dt;
         hydro.torque -= rec.torque / dt;
-    }
-}
-
-/// kp += V + Ω × r (r from `centroid`) on the rigid region of `patch`.
-fn add_rigid(
-    grid: &Grid,
-    patch: &GridPatch,
-    centroid: DVec3,
-    v: DVec3,
-    w: DVec3,
-    kp: &mut [Vec<f64>],
-) {
-    let [dx, dy, _] = patch.dims;
-    for row in 0..patch.len() / dx {
-        let (b, c) = (row % dy, row / dy);
-        for a in 0..dx {
-            if rigid_region(patch.phi[row * dx + a]) == 0.0 {
-                continue;
-            }
-            let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
-            let g = grid.idx(i, j, k);
-            let pos = grid.pos(i, j, k);
-            let u = v + w.cross(DVec3::new(pos[0], pos[1], pos[2]) - centroid);
-            for (q, kc) in kp.iter_mut().enumerate() {
-                kc[g] += u[q];
-            }
-        }
     }
 }
 

@@ -32,6 +32,9 @@ struct Tables {
     lap: [Vec<f64>; 3],
     /// Symbol of minus the second derivative along each axis, `k^2` (Nyquist included).
     k2: [Vec<f64>; 3],
+    /// `k sin(k h) / h` along each axis: the centred first difference's symbol times the
+    /// spectral one (the numerator of [`Spectral::forcing_velocity`]'s transfer function).
+    ks: [Vec<f64>; 3],
 }
 
 impl Tables {
@@ -60,7 +63,8 @@ impl Tables {
                 .collect()
         });
         let k2 = std::array::from_fn(|a| k[a].iter().map(|&ka| ka * ka).collect());
-        Tables { k, kd, lap, k2 }
+        let ks = std::array::from_fn(|a| k[a].iter().map(|&ka| ka * (ka * h).sin() / h).collect());
+        Tables { k, kd, lap, k2, ks }
     }
 }
 
@@ -148,8 +152,8 @@ impl Spectral {
     /// (k with the Nyquist wavenumber zeroed in the numerators, as in `velocity`). Each factor
     /// is symmetric positive and they commute, so f ↦ u is symmetric positive semi-definite
     /// (conjugate gradients apply: `systems/noslip.rs`). The mean (k = 0) is dropped: in the
-    /// periodic box the mean flow is the background's. `f` and `u` have `dim` components; m R f̂
-    /// is kept for [`Spectral::forcing_vorticity_add`].
+    /// periodic box the mean flow is the background's. `f` and `u` have `dim` components; the
+    /// vorticity's spectrum is kept for [`Spectral::forcing_vorticity_add`].
     ///
     /// Panics if [`Spectral::reserve_forcing`] was not called or a shape is wrong.
     pub fn forcing_velocity(&mut self, f: &[Vec<f64>], nu_dt: f64, u: &mut [Vec<f64>]) {
@@ -164,29 +168,56 @@ impl Spectral {
             self.fft.forward(fc, fh);
         }
         let ([_, ny, _], nxh) = self.fft.dims();
-        let [kx, ky, kz] = &self.tab.k;
-        let h = std::f64::consts::PI / self.k_nyquist;
-        let scale = |i: usize, j: usize, k: usize| {
-            let k2 = kx[i] * kx[i] + ky[j] * ky[j] + kz[k] * kz[k];
-            if k2 == 0.0 {
-                return 0.0;
-            }
-            let m =
-                (kx[i] * (kx[i] * h).sin() + ky[j] * (ky[j] * h).sin() + kz[k] * (kz[k] * h).sin())
-                    / (h * k2);
-            m / (1.0 + nu_dt * k2)
-        };
-        for fh in self.force_hat.iter_mut() {
-            fh.par_chunks_mut(nxh).enumerate().for_each(|(r, row)| {
-                let (j, k) = (r % ny, r / ny);
-                for (i, z) in row.iter_mut().enumerate() {
-                    *z *= scale(i, j, k);
-                }
-            });
-        }
+        let [lx, ly, lz] = &self.tab.k2;
+        let [sx, sy, sz] = &self.tab.ks;
         let [dx, dy, dz] = &self.tab.kd;
+        // m R, 0 at k = 0.
+        let scale = |i: usize, j: usize, k: usize| {
+            let k2 = lx[i] + ly[j] + lz[k];
+            if k2 == 0.0 {
+                0.0
+            } else {
+                (sx[i] + sy[j] + sz[k]) / (k2 * (1.0 + nu_dt * k2))
+            }
+        };
+        let i_ = |v: C64| C64::new(-v.im, v.re);
+        // In place: the force's spectrum becomes the vorticity's, ω̂ = i k × (m R f̂).
+        let (first, rest) = self.force_hat.split_at_mut(1);
+        let (second, third) = rest.split_at_mut(1);
+        if self.dim == 3 {
+            first[0]
+                .par_chunks_mut(nxh)
+                .zip(second[0].par_chunks_mut(nxh))
+                .zip(third[0].par_chunks_mut(nxh))
+                .enumerate()
+                .for_each(|(r, ((a, b), c))| {
+                    let (j, k) = (r % ny, r / ny);
+                    for i in 0..nxh {
+                        let s = scale(i, j, k);
+                        let (p, q, t) = (dx[i], dy[j], dz[k]);
+                        let (x, y, z) = (a[i] * s, b[i] * s, c[i] * s);
+                        a[i] = i_(z * q - y * t);
+                        b[i] = i_(x * t - z * p);
+                        c[i] = i_(y * p - x * q);
+                    }
+                });
+        } else {
+            first[0]
+                .par_chunks_mut(nxh)
+                .zip(second[0].par_chunks_mut(nxh))
+                .enumerate()
+                .for_each(|(r, (a, b))| {
+                    let j = r % ny;
+                    for i in 0..nxh {
+                        let s = scale(i, j, 0);
+                        a[i] = i_((b[i] * dx[i] - a[i] * dy[j]) * s);
+                        b[i] = C64::default();
+                    }
+                });
+        }
+        // u = BS(ω): û = i k × ω̂ / |k|².
         for (c, uc) in u.iter_mut().enumerate() {
-            let fh = &self.force_hat;
+            let wh = &self.force_hat;
             self.work
                 .par_chunks_mut(nxh)
                 .enumerate()
@@ -194,19 +225,23 @@ impl Spectral {
                     let (j, k) = (r % ny, r / ny);
                     let off = r * nxh;
                     for i in 0..nxh {
-                        let k2 = kx[i] * kx[i] + ky[j] * ky[j] + kz[k] * kz[k];
+                        let k2 = lx[i] + ly[j] + lz[k];
                         if k2 == 0.0 {
                             row[i] = C64::default();
                             continue;
                         }
-                        let kv = [dx[i], dy[j], dz[k]];
-                        let mut kf = C64::default();
-                        let mut kk = 0.0;
-                        for (q, fq) in fh.iter().enumerate() {
-                            kf += fq[off + i] * kv[q];
-                            kk += kv[q] * kv[q];
-                        }
-                        row[i] = (fh[c][off + i] * kk - kf * kv[c]) / k2;
+                        let num = if wh[1].is_empty() || self.dim == 2 {
+                            let w = wh[0][off + i];
+                            if c == 0 { w * dy[j] } else { -w * dx[i] }
+                        } else {
+                            let (a, b, d) = (wh[0][off + i], wh[1][off + i], wh[2][off + i]);
+                            match c {
+                                0 => d * dy[j] - b * dz[k],
+                                1 => a * dz[k] - d * dx[i],
+                                _ => b * dx[i] - a * dy[j],
+                            }
+                        };
+                        row[i] = i_(num) / k2;
                     }
                 });
             self.fft.inverse(None, &mut self.work, uc);
@@ -223,36 +258,8 @@ impl Spectral {
             "spectral: reserve_forcing first"
         );
         self.check_field(omega, self.omega_hat.len(), "omega");
-        let ([_, ny, _], nxh) = self.fft.dims();
-        let [dx, dy, dz] = &self.tab.kd;
-        let i_ = |v: C64| C64::new(-v.im, v.re);
-        for (c, oc) in omega.iter_mut().enumerate() {
-            let fh = &self.force_hat;
-            let comp = if self.dim == 2 { 2 } else { c };
-            self.work
-                .par_chunks_mut(nxh)
-                .enumerate()
-                .for_each(|(r, row)| {
-                    let (j, k) = (r % ny, r / ny);
-                    let off = r * nxh;
-                    for i in 0..nxh {
-                        let (p, q, t) = (dx[i], dy[j], dz[k]);
-                        let a = fh[0][off + i];
-                        let b = fh[1][off + i];
-                        let d = if fh.len() == 3 {
-                            fh[2][off + i]
-                        } else {
-                            C64::default()
-                        };
-                        // (i k × u)_comp
-                        row[i] = i_(match comp {
-                            0 => d * q - b * t,
-                            1 => a * t - d * p,
-                            _ => b * p - a * q,
-                        });
-                    }
-                });
-            self.fft.inverse(None, &mut self.work, scratch);
+        for (oc, wh) in omega.iter_mut().zip(self.force_hat.iter()) {
+            self.fft.inverse(Some(wh), &mut self.work, scratch);
             oc.par_iter_mut()
                 .zip(scratch.par_iter())
                 .for_each(|(o, s)| *o += s);

@@ -813,3 +813,42 @@ fn forcing_vorticity_carries_the_forcing_velocity() {
         }
     }
 }
+
+/// For one divergence-free Fourier mode f = a sin(k·x), a ⊥ k, the forcing's velocity is
+/// m(k) R(k) f: R = 1/(1 + νΔt|k|²) the diffusion's resolvent and m = Σ k_a sin(k_a h) / (h|k|²)
+/// the centred curl's transfer function against the spectral one (2D and 3D).
+#[test]
+fn forcing_response_of_one_mode_is_its_symbol() {
+    for (n, dim) in [([16, 12, 10], 3), ([16, 12, 1], 2)] {
+        let h = 0.1;
+        let grid = Grid::new(n, h, [0.0; 3]);
+        let mut s = Spectral::new(&grid);
+        s.reserve_forcing();
+        let len = |a: usize| n[a] as f64 * h;
+        let m_int = [3.0, 2.0, if dim == 3 { 1.0 } else { 0.0 }];
+        let k: Vec<f64> = (0..3).map(|a| 2.0 * PI * m_int[a] / len(a)).collect();
+        // a ⊥ k: (k_y, -k_x, 0).
+        let amp = [k[1], -k[0], 0.0];
+        let f: Vec<Vec<f64>> = (0..dim)
+            .map(|c| {
+                sample(&grid, |x| {
+                    amp[c] * (k[0] * x[0] + k[1] * x[1] + k[2] * x[2]).sin()
+                })
+            })
+            .collect();
+        let nu_dt = 0.002;
+        let k2: f64 = k.iter().map(|v| v * v).sum();
+        let m = k.iter().map(|v| v * (v * h).sin()).sum::<f64>() / (h * k2);
+        let factor = m / (1.0 + nu_dt * k2);
+        let mut u = vec![vec![0.0; grid.len()]; dim];
+        s.forcing_velocity(&f, nu_dt, &mut u);
+        for c in 0..dim {
+            let expect: Vec<f64> = f[c].iter().map(|v| v * factor).collect();
+            let err = max_diff(&u[c], &expect);
+            assert!(
+                err < 1e-12 * max_abs(&f[c]).max(1.0),
+                "{n:?} component {c}: {err}"
+            );
+        }
+    }
+}
