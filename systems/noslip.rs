@@ -33,7 +33,7 @@
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::bodies::coupling::MotionLaw;
-use crate::bodies::integrals::rigid_region;
+use crate::bodies::integrals::{rigid_region, solve_inertia};
 use crate::bodies::{Body, GridPatch, Hydro, Material, RigidState, ShapeVolume};
 use crate::solvers::Spectral;
 use bevy_ecs::prelude::*;
@@ -91,8 +91,8 @@ struct Recoil {
     range: (usize, usize),
     /// ρ_F / E.
     inv_e: f64,
-    /// ρ_F J_E⁻¹.
-    inv_j: DMat3,
+    /// J_E, the body's inertia beyond the fluid it displaces.
+    j_e: DMat3,
     /// Σ p h^d and Σ r × p h^d of the current search direction over the body's region.
     p_force: DVec3,
     p_torque: DVec3,
@@ -200,18 +200,6 @@ pub fn noslip(
         }
         let e = (mat.density - rho_f) * volume.0;
         let j_e = state.inertia * (e / state.volume.max(f64::MIN_POSITIVE));
-        let inv_j = if dim == 2 {
-            let jz = j_e.z_axis.z;
-            DMat3::from_diagonal(DVec3::new(
-                0.0,
-                0.0,
-                if jz != 0.0 { rho_f / jz } else { 0.0 },
-            ))
-        } else if j_e.determinant().abs() > 0.0 {
-            j_e.inverse() * rho_f
-        } else {
-            DMat3::ZERO
-        };
         let gyration = (state.inertia.x_axis.x + state.inertia.y_axis.y + state.inertia.z_axis.z)
             .max(0.0)
             .sqrt()
@@ -219,8 +207,8 @@ pub fn noslip(
         ns.bodies.push(Recoil {
             entity,
             range: (start, ns.nodes.len()),
-            inv_e: if e != 0.0 { rho_f / e } else { 0.0 },
-            inv_j,
+            inv_e: if e > 0.0 { rho_f / e } else { 0.0 },
+            j_e,
             p_force: DVec3::ZERO,
             p_torque: DVec3::ZERO,
             force: DVec3::ZERO,
@@ -271,7 +259,7 @@ pub fn noslip(
                 pl += rv.cross(*p * dv);
             }
             (rec.p_force, rec.p_torque) = (pf, pl);
-            let (dvel, dspin) = (pf * rec.inv_e, rec.inv_j * pl);
+            let (dvel, dspin) = (pf * rec.inv_e, solve_inertia(dim, rec.j_e, pl * rho_f));
             for (&(_, rv), ap) in ns.nodes[lo..hi].iter().zip(&mut ns.ap[lo..hi]) {
                 let add = dvel + dspin.cross(rv);
                 for q in 0..dim {
@@ -339,7 +327,7 @@ pub fn noslip(
         };
         // rec.force = ρ_F Σ W x h^d: the momentum the fluid took.
         state.velocity -= rec.force * (rec.inv_e / rho_f);
-        state.angular_velocity -= rec.inv_j * rec.torque / rho_f;
+        state.angular_velocity -= solve_inertia(dim, rec.j_e, rec.torque);
         hydro.force -= rec.force / dt;
         hydro.torque -= rec.torque / dt;
     }

@@ -59,7 +59,7 @@ use crate::base::grid::Grid;
 use crate::base::params::BodyCoupling;
 use crate::bodies::coupling::{MotionLaw, PressureState};
 use crate::bodies::integrals::{
-    BodySums, integrate_n, mass_properties, penalized_weight, rigid_region,
+    BodySums, integrate_n, mass_properties, penalized_weight, rigid_region, solve_inertia,
 };
 use crate::bodies::{
     Body, BodyFields, GridPatch, Hydro, Material, RigidState, ShapeVolume, kinematic_velocity,
@@ -299,18 +299,6 @@ pub fn rigid_velocity(
             force: p_fluid / dt,
             torque: l_fluid / dt,
         };
-    }
-}
-
-/// J⁻¹ l: in 2D about z only (J_zz); zero where J is singular (an empty body).
-fn solve_inertia(dim: usize, j: DMat3, l: DVec3) -> DVec3 {
-    if dim == 2 {
-        let jz = j.z_axis.z;
-        DVec3::new(0.0, 0.0, if jz > 0.0 { l.z / jz } else { 0.0 })
-    } else if j.determinant().abs() > 0.0 {
-        j.inverse() * l
-    } else {
-        DVec3::ZERO
     }
 }
 

@@ -46,6 +46,18 @@ pub fn rigid_region(phi: f64) -> f64 {
     if phi > 0.0 { 1.0 } else { 0.0 }
 }
 
+/// J⁻¹ l: in 2D about z only (J_zz); zero where J is singular (an empty body).
+pub fn solve_inertia(dim: usize, j: DMat3, l: DVec3) -> DVec3 {
+    if dim == 2 {
+        let jz = j.z_axis.z;
+        DVec3::new(0.0, 0.0, if jz > 0.0 { l.z / jz } else { 0.0 })
+    } else if j.determinant().abs() > 0.0 {
+        j.inverse() * l
+    } else {
+        DVec3::ZERO
+    }
+}
+
 /// The integrals of one weight over a patch: (volume, centroid, ∫χu, ∫χ r×u, J), with r
 /// measured from the centroid.
 pub type Moments = (f64, DVec3, DVec3, DVec3, DMat3);

@@ -215,35 +215,16 @@ impl Spectral {
                     }
                 });
         }
-        // u = BS(ω): û = i k × ω̂ / |k|².
+        // u = BS(ω).
+        let ncomp = self.omega_hat.len();
         for (c, uc) in u.iter_mut().enumerate() {
-            let wh = &self.force_hat;
-            self.work
-                .par_chunks_mut(nxh)
-                .enumerate()
-                .for_each(|(r, row)| {
-                    let (j, k) = (r % ny, r / ny);
-                    let off = r * nxh;
-                    for i in 0..nxh {
-                        let k2 = lx[i] + ly[j] + lz[k];
-                        if k2 == 0.0 {
-                            row[i] = C64::default();
-                            continue;
-                        }
-                        let num = if wh[1].is_empty() || self.dim == 2 {
-                            let w = wh[0][off + i];
-                            if c == 0 { w * dy[j] } else { -w * dx[i] }
-                        } else {
-                            let (a, b, d) = (wh[0][off + i], wh[1][off + i], wh[2][off + i]);
-                            match c {
-                                0 => d * dy[j] - b * dz[k],
-                                1 => a * dz[k] - d * dx[i],
-                                _ => b * dx[i] - a * dy[j],
-                            }
-                        };
-                        row[i] = i_(num) / k2;
-                    }
-                });
+            velocity_hat(
+                &self.tab,
+                self.fft.dims(),
+                &self.force_hat[..ncomp],
+                c,
+                &mut self.work,
+            );
             self.fft.inverse(None, &mut self.work, uc);
         }
     }
@@ -554,55 +535,68 @@ impl Spectral {
 
     /// Writes the spectrum of velocity component `c` (without its mean) into `self.work`.
     fn velocity_hat(&mut self, c: usize) {
-        let ([_, ny, _], nxh) = self.fft.dims();
-        let [kx, ky, kz] = &self.tab.k;
-        let [dx, dy, dz] = &self.tab.kd;
-        let wh = &self.omega_hat;
-        // i * z / k2
-        let i_over = |z: C64, k2: f64| {
-            if k2 > 0.0 {
-                C64::new(-z.im, z.re) / k2
-            } else {
-                C64::default()
-            }
-        };
-        self.work
-            .par_chunks_mut(nxh)
-            .enumerate()
-            .for_each(|(r, row)| {
-                let (j, k) = (r % ny, r / ny);
-                let k2yz = ky[j] * ky[j] + kz[k] * kz[k];
-                let off = r * nxh;
-                match wh.len() {
-                    1 => {
-                        let w = &wh[0][off..off + nxh];
-                        for i in 0..nxh {
-                            let k2 = kx[i] * kx[i] + k2yz;
-                            let num = if c == 0 { w[i] * dy[j] } else { -w[i] * dx[i] };
-                            row[i] = i_over(num, k2);
-                        }
-                    }
-                    _ => {
-                        let (a, b, d) = (
-                            &wh[0][off..off + nxh],
-                            &wh[1][off..off + nxh],
-                            &wh[2][off..off + nxh],
-                        );
-                        let (kyj, kzk) = (dy[j], dz[k]);
-                        for i in 0..nxh {
-                            let k2 = kx[i] * kx[i] + k2yz;
-                            let kxi = dx[i];
-                            let cross = match c {
-                                0 => d[i] * kyj - b[i] * kzk,
-                                1 => a[i] * kzk - d[i] * kxi,
-                                _ => b[i] * kxi - a[i] * kyj,
-                            };
-                            row[i] = i_over(cross, k2);
-                        }
-                    }
-                }
-            });
+        velocity_hat(
+            &self.tab,
+            self.fft.dims(),
+            &self.omega_hat,
+            c,
+            &mut self.work,
+        );
     }
+}
+
+/// The spectrum of velocity component `c` (without its mean) of the vorticity spectrum `wh`
+/// (1 component in 2D, 3 in 3D), û = i k × ω̂ / |k|², into `work`.
+fn velocity_hat(
+    tab: &Tables,
+    ([_, ny, _], nxh): ([usize; 3], usize),
+    wh: &[Vec<C64>],
+    c: usize,
+    work: &mut [C64],
+) {
+    let [kx, ky, kz] = &tab.k;
+    let [dx, dy, dz] = &tab.kd;
+    // i * z / k2
+    let i_over = |z: C64, k2: f64| {
+        if k2 > 0.0 {
+            C64::new(-z.im, z.re) / k2
+        } else {
+            C64::default()
+        }
+    };
+    work.par_chunks_mut(nxh).enumerate().for_each(|(r, row)| {
+        let (j, k) = (r % ny, r / ny);
+        let k2yz = ky[j] * ky[j] + kz[k] * kz[k];
+        let off = r * nxh;
+        match wh.len() {
+            1 => {
+                let w = &wh[0][off..off + nxh];
+                for i in 0..nxh {
+                    let k2 = kx[i] * kx[i] + k2yz;
+                    let num = if c == 0 { w[i] * dy[j] } else { -w[i] * dx[i] };
+                    row[i] = i_over(num, k2);
+                }
+            }
+            _ => {
+                let (a, b, d) = (
+                    &wh[0][off..off + nxh],
+                    &wh[1][off..off + nxh],
+                    &wh[2][off..off + nxh],
+                );
+                let (kyj, kzk) = (dy[j], dz[k]);
+                for i in 0..nxh {
+                    let k2 = kx[i] * kx[i] + k2yz;
+                    let kxi = dx[i];
+                    let cross = match c {
+                        0 => d[i] * kyj - b[i] * kzk,
+                        1 => a[i] * kzk - d[i] * kxi,
+                        _ => b[i] * kxi - a[i] * kyj,
+                    };
+                    row[i] = i_over(cross, k2);
+                }
+            }
+        }
+    });
 }
 
 /// ω += ∇×a by centred differences (periodic): the vorticity of a velocity increment `a`
