@@ -43,7 +43,7 @@
 
 use crate::base::fields::SimTime;
 use crate::base::grid::Grid;
-use crate::bodies::contact::ContactParams;
+use crate::bodies::contact::{ContactParams, contact_velocity_change, inverse_inertia};
 use crate::bodies::{
     Body, BodyShape, ContactPoints, ContactState, GridPatch, Material, RigidState,
 };
@@ -508,24 +508,9 @@ pub fn contact_impulse(
         {
             continue;
         }
-        let m = mat.density * state.volume;
-        state.velocity += dt * contact.force / m;
-        let jinv = inverse_inertia(grid.dim, mat.density, &state);
-        state.angular_velocity += dt * (jinv * contact.torque);
-    }
-}
-
-/// (ρJ)⁻¹ of a body of density `rho` in state `s` (J from χ): in 2D only the rotation about z
-/// (the x and y rows are zero); zero where J is singular (an empty body).
-fn inverse_inertia(dim: usize, rho: f64, s: &RigidState) -> glam::DMat3 {
-    let jw = rho * s.inertia;
-    if dim == 2 {
-        let jz = jw.z_axis.z;
-        glam::DMat3::from_diagonal(DVec3::new(0.0, 0.0, if jz > 0.0 { 1.0 / jz } else { 0.0 }))
-    } else if jw.determinant().abs() > 0.0 {
-        jw.inverse()
-    } else {
-        glam::DMat3::ZERO
+        let (dv, dw) = contact_velocity_change(grid.dim, mat.density, &state, contact, dt);
+        state.velocity += dv;
+        state.angular_velocity += dw;
     }
 }
 

@@ -9,24 +9,43 @@
 //! as the next step's previous velocity ([`PreviousVelocity`]).
 
 use crate::base::fields::SimTime;
-use crate::bodies::{Body, PreviousVelocity, RigidState, kinematic_velocity};
+use crate::base::grid::Grid;
+use crate::bodies::contact::contact_velocity_change;
+use crate::bodies::{
+    Body, ContactState, Material, PreviousVelocity, RigidState, kinematic_velocity,
+};
 use bevy_ecs::prelude::*;
-use glam::DQuat;
+use glam::{DQuat, DVec3};
+
+/// A body's pose, its last velocity and what its contact gave it this step.
+type Moving = (
+    &'static Body,
+    &'static mut RigidState,
+    &'static mut PreviousVelocity,
+    Option<(&'static Material, &'static ContactState)>,
+);
 
 /// The rigid-update system.
-pub fn rigid_update(
-    time: Res<SimTime>,
-    mut bodies: Query<(&Body, &mut RigidState, &mut PreviousVelocity)>,
-) {
+pub fn rigid_update(time: Res<SimTime>, grid: Res<Grid>, mut bodies: Query<Moving>) {
     let dt = time.dt;
-    for (body, mut s, mut prev) in &mut bodies {
+    for (body, mut s, mut prev, contact) in &mut bodies {
         if body.is_static() {
             continue;
         }
         // This step's ū, for the next step's acceleration (baroclinic term).
+        // The acceleration the flow and gravity gave the body over the step, the contact's
+        // part taken out (a virtual mass that lagged a contact force would feed a lagged
+        // spring: a disk bouncing on a floor never came to rest).
+        let inv_dt = if dt > 0.0 { 1.0 / dt } else { 0.0 };
+        let (dv, dw) = match contact {
+            Some((mat, c)) => contact_velocity_change(grid.dim, mat.density, &s, c, dt),
+            None => (DVec3::ZERO, DVec3::ZERO),
+        };
         *prev = PreviousVelocity {
             velocity: s.velocity,
             angular_velocity: s.angular_velocity,
+            acceleration: (s.velocity - prev.velocity - dv) * inv_dt,
+            angular_acceleration: (s.angular_velocity - prev.angular_velocity - dw) * inv_dt,
         };
         if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {
             // A prescribed motion is that of the body frame's origin.

@@ -24,9 +24,9 @@
 //! J_w (Ω̃ - Ω^n)/Δt. With `Baroclinic` (the default) V and Ω are ũ and Ω̃, and gravity comes
 //! through the baroclinic term.
 //!
-//! Under `Pressure`, a body heavy enough for its shape moves by Newton-Euler with its own mass
-//! instead (`MotionLaw::NewtonEuler`, decided once when it is made, see
-//! `bodies::coupling::motion_law`; never with a free surface). The density system leaves it
+//! Under `Pressure` without a free surface, a bounded body moves by Newton-Euler with its own
+//! mass instead (`MotionLaw::NewtonEuler`, decided once when it is made, see
+//! `bodies::coupling::newton_euler`). The density system leaves it
 //! out of ρ, so the projection carries its rigid region as fluid of the phases' density ρ_P,
 //! of mass M_w = ∫ρ_P w, and the body's mass beyond the fluid it displaces,
 //! E = ρ_i |S_i| - ∫ρ_P χ_i, takes the fluid's impulse on the region and its weight less
@@ -37,8 +37,14 @@
 //! then never sits in ρ where the flow's uniform ν acts on it: a sphere settling at
 //! 3.2 cells per radius (`stokes-settling`, h = 1/32) moves at 0.998 of Hasimoto's velocity at
 //! densities 1.1, 2, 20 and 100, where as heavy fluid of the projection it moved at 0.984 (2),
-//! 0.929 (20) and 0.84 (100). The lagged added mass of the outside fluid makes this explicit
-//! update unstable for light bodies, which keep the projection.
+//! 0.929 (20) and 0.84 (100). The lagged added mass m_a of the outside fluid makes this
+//! explicit update amplify an error by m_a / (M_w + E) per step, and a light body's E is
+//! negative: the body's virtual mass M_v ([`VirtualMass`], Schwarz, Kempe & Fröhlich 2015) is
+//! added to both sides, with last step's acceleration a^n on the right,
+//!   (M_w + E + M_v) (V^{n+1} - V^n) = M_w (ũ - V^n) + E g Δt + M_v a^n Δt,
+//! and the same for the rotation with M_v's share of J_i; a steady motion is unchanged, a
+//! transient lags by about M_v / (m + m_a) steps. M_v is zero for a body heavy enough for
+//! its shape (a sphere from density 1.1).
 //!
 //! Under `Pressure` (either law) the excess weight's moment about the rigid region's
 //! centroid, weight at the body's centroid and buoyancy at the centroid of the fluid it
@@ -57,15 +63,29 @@
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::BodyCoupling;
-use crate::bodies::coupling::{MotionLaw, PressureState};
+use crate::bodies::coupling::{MotionLaw, PressureState, VirtualMass};
 use crate::bodies::integrals::{
     BodySums, integrate_n, mass_properties, penalized_weight, rigid_region, solve_inertia,
 };
 use crate::bodies::{
-    Body, BodyFields, GridPatch, Hydro, Material, RigidState, ShapeVolume, kinematic_velocity,
+    Body, BodyFields, GridPatch, Hydro, Material, PreviousVelocity, RigidState, ShapeVolume,
+    kinematic_velocity,
 };
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
+
+/// What the rigid velocity reads and writes of a body.
+type FreeBody = (
+    &'static Body,
+    &'static GridPatch,
+    &'static Material,
+    &'static MotionLaw,
+    &'static ShapeVolume,
+    &'static VirtualMass,
+    &'static PreviousVelocity,
+    &'static mut RigidState,
+    &'static mut Hydro,
+);
 
 /// The rigid-velocity system.
 #[allow(clippy::too_many_arguments)]
@@ -76,15 +96,7 @@ pub fn rigid_velocity(
     fields: Res<Fields>,
     bf: Res<BodyFields>,
     mut sums: ResMut<BodySums>,
-    mut bodies: Query<(
-        &Body,
-        &GridPatch,
-        &Material,
-        &MotionLaw,
-        &ShapeVolume,
-        &mut RigidState,
-        &mut Hydro,
-    )>,
+    mut bodies: Query<FreeBody>,
     pressure_state: Option<Res<PressureState>>,
 ) {
     let momentum = params.numerics.body_coupling == BodyCoupling::Momentum;
@@ -101,7 +113,7 @@ pub fn rigid_velocity(
         _ => None,
     };
     let g = DVec3::from_array(params.gravity);
-    for (body, patch, mat, law, shape_volume, mut state, mut hydro) in &mut bodies {
+    for (body, patch, mat, law, shape_volume, virt, last, mut state, mut hydro) in &mut bodies {
         if body.is_static() {
             state.velocity = DVec3::ZERO;
             state.angular_velocity = DVec3::ZERO;
@@ -230,21 +242,25 @@ pub fn rigid_velocity(
             // (with the mean displaced density).
             let m_w = wvol;
             let e_rho = e / state.volume;
-            let j_body = wj + e_rho * state.inertia;
+            // The virtual mass (`VirtualMass`) on both sides, with last step's acceleration.
+            let (m_v, v_rho) = (virt.mass, virt.per_volume);
+            let j_body = wj + (e_rho + v_rho) * state.inertia;
             if first {
                 *hydro = Hydro::default();
-                state.velocity += weight / (m_w + e);
+                state.velocity += weight / (m_w + e + m_v);
                 state.angular_velocity += solve_inertia(grid.dim, j_body, torque_impulse);
                 continue;
             }
             let dt = fields.dt_prev;
             let p_fluid = mom - m_w * v_prev;
-            state.velocity = v_prev + (p_fluid + weight) / (m_w + e);
+            let lag = m_v * last.acceleration * time.dt;
+            state.velocity = v_prev + (p_fluid + weight + lag) / (m_w + e + m_v);
             let l_fluid = ang - wj * w_prev;
+            let spin_lag = v_rho * (j_old * (w_prev + last.angular_acceleration * time.dt));
             state.angular_velocity = solve_inertia(
                 grid.dim,
                 j_body,
-                ang + e_rho * (j_old * w_prev) + torque_impulse,
+                ang + e_rho * (j_old * w_prev) + spin_lag + torque_impulse,
             );
             *hydro = Hydro {
                 force: p_fluid / dt,

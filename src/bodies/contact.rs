@@ -116,3 +116,41 @@ pub fn zeta(s: f64) -> f64 {
         1.0 - (2.0 * std::f64::consts::PI * s).cos()
     }
 }
+
+/// (ρJ)⁻¹ of a body of density `rho` in state `s` (J from χ): in 2D only the rotation about z
+/// (the x and y rows are zero); zero where J is singular (an empty body).
+pub fn inverse_inertia(dim: usize, rho: f64, s: &crate::bodies::RigidState) -> glam::DMat3 {
+    let jw = rho * s.inertia;
+    if dim == 2 {
+        let jz = jw.z_axis.z;
+        glam::DMat3::from_diagonal(glam::DVec3::new(
+            0.0,
+            0.0,
+            if jz > 0.0 { 1.0 / jz } else { 0.0 },
+        ))
+    } else if jw.determinant().abs() > 0.0 {
+        jw.inverse()
+    } else {
+        glam::DMat3::ZERO
+    }
+}
+
+/// The change of velocity and angular velocity the step's contact force and torque give a
+/// body of density `rho` over `dt`: F Δt/m and (ρJ)⁻¹ T Δt with the mass and inertia of χ
+/// (zero for an empty body).
+pub fn contact_velocity_change(
+    dim: usize,
+    rho: f64,
+    state: &crate::bodies::RigidState,
+    contact: &crate::bodies::ContactState,
+    dt: f64,
+) -> (glam::DVec3, glam::DVec3) {
+    let m = rho * state.volume;
+    if m <= 0.0 {
+        return (glam::DVec3::ZERO, glam::DVec3::ZERO);
+    }
+    (
+        dt * contact.force / m,
+        dt * (inverse_inertia(dim, rho, state) * contact.torque),
+    )
+}

@@ -35,44 +35,69 @@ pub struct PressureState {
 }
 
 /// How a dynamic body's motion follows from the flow under `body_coupling: Pressure`, decided
-/// once when the body is made, from its density and shape ([`motion_law`]); no scene setting.
+/// once when the body is made ([`newton_euler`]); no scene setting.
 #[derive(Component, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum MotionLaw {
-    /// The body is heavy fluid to the variable-density projection: its density is in ρ, and
-    /// its rigid velocity is the density-weighted mean of the projected flow
-    /// (`systems/rigid_velocity.rs`). Stable at any density ratio; its drag grows with the
-    /// density (issue 35: -7% at 20, -59% at 1000 times the fluid's).
+    /// The body is heavy (or light) fluid to the variable-density projection: its density is
+    /// in ρ, and its rigid velocity is the density-weighted mean of the projected flow
+    /// (`systems/rigid_velocity.rs`). Stable at any density ratio, but its drag is set by the
+    /// smoothing band and the time step (issue 35: -7% at 20, -59% at 1000 times the fluid's
+    /// density, +6.5% at 0.01). Taken with a free surface and for unbounded shapes.
     #[default]
     Projected,
     /// Newton-Euler with the body's own mass: the projection sees fluid of the phases'
     /// density inside the body, and the body's mass beyond the fluid it displaces takes the
     /// fluid's impulse on its rigid region and its own weight less buoyancy,
-    /// (M_w + E) (V^{n+1} - V^n) = M_w (ũ - V^n) + E g Δt. Explicit in the added mass of the
-    /// fluid outside, so only for bodies heavy enough for their shape.
+    /// (M_w + E + M_v) (V^{n+1} - V^n) = M_w (ũ - V^n) + E g Δt + M_v a^n Δt, with the
+    /// virtual mass M_v ([`VirtualMass`]) that makes it stable at any density; the no-slip
+    /// (`systems/noslip.rs`) then holds the flow to the body with its recoil.
     NewtonEuler,
 }
 
-/// Whether a dynamic body of density `density` moves by Newton-Euler in a fluid of density
-/// `rho_fluid` (the liquid's with a free surface): when its own mass is at least twice the
-/// largest added mass its shape can have. The lagged added mass m_a of the fluid outside the
-/// body, against the body's mass m, makes the explicit update amplify an error by m_a / m per
-/// step; the added mass of a body plus its displaced fluid is at most that of a circle or
-/// sphere enclosing it (m_a + ρ_F V grows with the body), which is 2 ρ_F π R² in 2D and
-/// 1.5 ρ_F (4/3) π R³ in 3D. R is the longest semi-axis of the body's equivalent ellipse or
-/// ellipsoid (the one with its volume and second moments), from its reference level set
-/// sampled at half the grid spacing `h` (`dim` 2 or 3): a sphere moves by Newton-Euler from
-/// density 1 (m_a = V/2), a disk from 2 (m_a = A), an ellipse of aspect ratio 10 from about 38
-/// (its broadside added mass is ten times its own fluid's). Unbounded shapes stay `Projected`.
-pub fn motion_law(
+/// How a dynamic body of density `density` moves in a fluid of density `rho_fluid` when the
+/// no-slip runs (`body_coupling: Pressure` without a free surface), decided once when it is
+/// made: by Newton-Euler with its own mass and the virtual mass [`VirtualMass`] its density
+/// and shape need, whatever the density; `Projected` for an unbounded shape. `exact_volume` is
+/// the shape's exact volume (0 when it has none: the volume sampled at half the grid spacing
+/// `h` is taken).
+pub fn newton_euler(
     level_set: &crate::bodies::levelset::LocalLevelSet,
     h: f64,
     dim: usize,
     density: f64,
     rho_fluid: f64,
-) -> MotionLaw {
-    let Some((lo, hi)) = level_set.bounds() else {
-        return MotionLaw::Projected;
-    };
+    exact_volume: f64,
+) -> (MotionLaw, VirtualMass) {
+    match added_mass_bound(level_set, h, dim) {
+        Some((sampled, added)) => {
+            let volume = if exact_volume > 0.0 {
+                exact_volume
+            } else {
+                sampled
+            };
+            // The bound scales with the volume (it is per unit of the sampled one).
+            let added = added * volume / sampled;
+            (
+                MotionLaw::NewtonEuler,
+                VirtualMass::new(volume, added, density, rho_fluid),
+            )
+        }
+        None => (MotionLaw::Projected, VirtualMass::default()),
+    }
+}
+
+/// The volume V of a body's shape and the largest added mass per unit fluid density its
+/// shape can have, from its reference level set sampled at half the grid spacing `h` (`dim` 2
+/// or 3); `None` for an unbounded shape. The added mass of a body plus its displaced fluid is
+/// at most that of a circle or sphere enclosing it (m_a + ρ_F V grows with the body), which
+/// is 2 π R² in 2D and 1.5 (4/3) π R³ in 3D per unit density, R the longest semi-axis of the
+/// body's equivalent ellipse or ellipsoid (the one with its volume and second moments).
+pub fn added_mass_bound(
+    level_set: &crate::bodies::levelset::LocalLevelSet,
+    h: f64,
+    dim: usize,
+) -> Option<(f64, f64)> {
+    let (lo, hi) = level_set.bounds()?;
     let s = 0.5 * h;
     let n = |a: usize| {
         if a < dim {
@@ -101,7 +126,7 @@ pub fn motion_law(
         }
     }
     if v == 0.0 {
-        return MotionLaw::Projected;
+        return None;
     }
     let c = m1 / v;
     // Second moments about the centroid, per unit volume.
@@ -119,11 +144,47 @@ pub fn motion_law(
         let r2 = 5.0 * largest_eigenvalue(cov);
         (r2, 1.5 * 4.0 / 3.0 * std::f64::consts::PI * r2 * r2.sqrt())
     };
-    let added = (rho_fluid * (bound - volume)).max(0.0);
-    if r2 > 0.0 && density * volume >= 2.0 * added {
-        MotionLaw::NewtonEuler
-    } else {
-        MotionLaw::Projected
+    (r2 > 0.0).then_some((volume, (bound - volume).max(0.0)))
+}
+
+/// The virtual mass M_v of a body moving by Newton-Euler under the no-slip
+/// (`systems/noslip.rs`), and its inertia with it: Schwarz, Kempe & Fröhlich (J. Comput.
+/// Phys. 281, 2015) add M_v dV/dt to both sides of the body's momentum balance, implicit on
+/// the left and extrapolated from the last step on the right,
+///   (m + M_v) (V^{n+1} - V^n) / Δt = F + M_v (V^n - V^{n-1}) / Δt_{n-1},
+/// which leaves every steady motion as it was and makes the lagged added mass and the
+/// negative excess mass of a light body harmless: the excess mass E = m - ρ_F V the body's
+/// recoil divides by becomes E + M_v, and the explicit update's amplification
+/// m_a / (m + M_v). A transient converges geometrically, without oscillation, by the factor
+/// M_v / (m + m_a + M_v) per step (the fluid's added mass m_a is implicit in the no-slip).
+/// M_v is the least mass that keeps (m + M_v) at least twice the shape's largest added mass
+/// ([`added_mass_bound`]) and E + M_v at least [`VIRTUAL_FLOOR`] ρ_F V; zero for a body
+/// heavy enough for both (a sphere from 1.1 times the fluid's density).
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct VirtualMass {
+    /// M_v, mass units.
+    pub mass: f64,
+    /// M_v per unit of the body's volume: its inertia is this times the body's unit-density
+    /// inertia.
+    pub per_volume: f64,
+}
+
+/// The least E + M_v of a Newton-Euler body, in units of the fluid mass it displaces.
+pub const VIRTUAL_FLOOR: f64 = 0.1;
+
+impl VirtualMass {
+    /// The virtual mass of a body of density `density` in a fluid of density `rho_fluid`,
+    /// from its shape's volume and added-mass bound ([`added_mass_bound`]).
+    pub fn new(volume: f64, added: f64, density: f64, rho_fluid: f64) -> Self {
+        let m = density * volume;
+        let e = m - rho_fluid * volume;
+        let mass = (2.0 * rho_fluid * added - m)
+            .max(VIRTUAL_FLOOR * rho_fluid * volume - e)
+            .max(0.0);
+        VirtualMass {
+            mass,
+            per_volume: if volume > 0.0 { mass / volume } else { 0.0 },
+        }
     }
 }
 

@@ -4,7 +4,7 @@
 
 use crate::base::grid::Grid;
 use crate::base::params::BodyCoupling;
-use crate::bodies::coupling::{MotionLaw, motion_law};
+use crate::bodies::coupling::{MotionLaw, VirtualMass, newton_euler};
 use crate::bodies::levelset::LocalLevelSet;
 use crate::bodies::{
     Body, BodyKind, BodyShape, BodySurface, ContactPoints, ContactState, FreeMotion, GridPatch,
@@ -42,14 +42,22 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
         // one its rigid motion carried in, not the fluid it displaces now, and Newton-Euler
         // would take its buoyancy from it.
         let params = &resolved.params;
-        let law = match spec.kind {
+        let exact_volume = geom.volume().unwrap_or(0.0);
+        let (law, virtual_mass) = match spec.kind {
             BodyKind::Dynamic
                 if params.numerics.body_coupling == BodyCoupling::Pressure
                     && !params.free_surface =>
             {
-                motion_law(&level_set, grid.h, grid.dim, density, params.rho_fluid)
+                newton_euler(
+                    &level_set,
+                    grid.h,
+                    grid.dim,
+                    density,
+                    params.rho_fluid,
+                    exact_volume,
+                )
             }
-            _ => MotionLaw::Projected,
+            _ => (MotionLaw::Projected, VirtualMass::default()),
         };
         let orientation = crate::bodies::rotation(&spec.rotation);
         let (velocity, angular_velocity) = match &spec.kind {
@@ -93,8 +101,9 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
                 inertia: DMat3::ZERO,
             },
             Material { density },
-            ShapeVolume(geom.volume().unwrap_or(0.0)),
+            ShapeVolume(exact_volume),
             law,
+            virtual_mass,
             BodyShape { level_set },
             patch,
             Hydro::default(),
@@ -106,6 +115,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             PreviousVelocity {
                 velocity,
                 angular_velocity,
+                ..Default::default()
             },
             contact_points,
             BodySurface(geom.surface(diagonal, grid.dim)),

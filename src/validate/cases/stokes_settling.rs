@@ -4,7 +4,7 @@
 use super::common::{MODEL, dynamic_body};
 use crate::scene::Scene;
 use crate::sim::engine::Simulation;
-use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
+use crate::validate::{Case, Report, Row, RunTime};
 use std::f64::consts::PI;
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -17,38 +17,7 @@ pub const CASE: Case = Case {
     full_time: RunTime::Long,
     quick_time: RunTime::Minutes,
     run: stokes_settling,
-    known_failures: &[
-        KnownFailure {
-            row: "h = 1/32 (3.2 cells per radius), density 0.01:",
-            quick: true,
-            full: true,
-            why: "+6.5% (+7.4% at h = 1/48): a body lighter than the fluid stays with the projection, whose rigid band reaches about eps beyond the surface; the no-slip is imposed once per step; issue 35",
-        },
-        KnownFailure {
-            row: "h = 1/32 (3.2 cells per radius), density 0.1:",
-            quick: false,
-            full: true,
-            why: "+4.2% (+5.2% at h = 1/48): as at 0.01; issue 35",
-        },
-        KnownFailure {
-            row: "h = 1/48 (4.8 cells per radius), density 0.01:",
-            quick: false,
-            full: true,
-            why: "+7.4%: the light end moves away from Hasimoto as the grid is refined (+6.5% at h = 1/32); issue 35",
-        },
-        KnownFailure {
-            row: "h = 1/48 (4.8 cells per radius), density 0.1:",
-            quick: false,
-            full: true,
-            why: "+5.2% (+4.2% at h = 1/32); issue 35",
-        },
-        KnownFailure {
-            row: "h = 1/48 (4.8 cells per radius), density 0.5:",
-            quick: false,
-            full: true,
-            why: "+2.3% (+1.5% at h = 1/32); issue 35",
-        },
-    ],
+    known_failures: &[],
 };
 
 /// Velocity along gravity of a sphere of radius 0.1 and density `rho` settling in a periodic
