@@ -107,11 +107,9 @@ pub struct PreviousVelocity {
     pub angular_velocity: DVec3,
     /// The acceleration over the previous step, (V - V_prev)/Δt: a Newton-Euler body's
     /// virtual mass takes it as the next step's extrapolated acceleration
-    /// ([`crate::bodies::coupling::VirtualMass`]).
-    #[serde(default)]
+    /// ([`crate::bodies::coupling::VirtualMass`]). The contact's part is left out.
     pub acceleration: DVec3,
     /// The angular acceleration over the previous step, (Ω - Ω_prev)/Δt.
-    #[serde(default)]
     pub angular_acceleration: DVec3,
 }
 

@@ -68,9 +68,11 @@ const END_MAGIC: [u8; 4] = *b"KEND";
 /// The trailer: byte length (u64), CRC-32 (u32), [`END_MAGIC`].
 const TRAILER: usize = 16;
 /// Version of the layout; a checkpoint of another format version is refused. Formats 1 and 2
-/// were hand-written; format 3 is serde (postcard) throughout. It changes with the serialized
-/// layout of anything saved here: [`RunProgress`], [`SimTime`] and the body components.
-pub const FORMAT_VERSION: u32 = 3;
+/// were hand-written; format 3 is serde (postcard) throughout; format 4 adds the bodies' last
+/// accelerations to [`PreviousVelocity`] (the virtual mass's extrapolation). It changes with
+/// the serialized layout of anything saved here: [`RunProgress`], [`SimTime`] and the body
+/// components.
+pub const FORMAT_VERSION: u32 = 4;
 /// The tumble version that writes (and alone restarts) these checkpoints.
 pub const CRATE_VERSION: &str = env!("CARGO_PKG_VERSION");
 
@@ -674,7 +676,12 @@ fn identify(b: &[u8]) -> Result<&[u8], String> {
     };
     match u32::from_le_bytes(*format) {
         FORMAT_VERSION => Ok(rest),
-        old @ 1..FORMAT_VERSION => Err(format!(
+        old @ 3..FORMAT_VERSION => Err(format!(
+            "it is a checkpoint in format {old}, the layout of an earlier build; {}: restart \
+             it with the tumble that wrote it, or rerun the scene",
+            what_is_read()
+        )),
+        old @ 1..3 => Err(format!(
             "it is a checkpoint in format {old}, the hand-written layout of earlier builds \
              ({}); {}: restart it with the tumble that wrote it, or rerun the scene",
             old_writer(rest).map_or("its writer unknown".into(), |v| format!("by tumble {v}")),
