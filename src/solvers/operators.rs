@@ -92,6 +92,9 @@ pub struct Spectral {
     /// Spectrum of the last forcing response, one buffer per velocity component (empty until
     /// [`Spectral::reserve_forcing`]).
     force_hat: Vec<Vec<C64>>,
+    /// The vorticity spectrum of a combination of forcings, Σ α_i ∇×(m R f_i)
+    /// ([`Spectral::forcing_accumulate`]), one buffer per vorticity component.
+    force_sum_hat: Vec<Vec<C64>>,
 }
 
 /// The damping of the top of the spectrum that [`Spectral::diffuse`] applies with the
@@ -133,6 +136,7 @@ impl Spectral {
             k_nyquist: std::f64::consts::PI / grid.h,
             removed_rows: vec![0.0; clen / nxh],
             force_hat: Vec::new(),
+            force_sum_hat: Vec::new(),
         }
     }
 
@@ -141,6 +145,27 @@ impl Spectral {
         if self.force_hat.len() != self.dim {
             let clen = self.fft.complex_len();
             self.force_hat = (0..self.dim).map(|_| vec![C64::default(); clen]).collect();
+            let ncomp = self.omega_hat.len();
+            self.force_sum_hat = (0..ncomp).map(|_| vec![C64::default(); clen]).collect();
+        }
+    }
+
+    /// Starts a new combination of forcings (see [`Spectral::forcing_accumulate`]) at zero.
+    pub fn forcing_reset(&mut self) {
+        for c in self.force_sum_hat.iter_mut() {
+            c.par_iter_mut().for_each(|v| *v = C64::default());
+        }
+    }
+
+    /// Adds `alpha` times the vorticity of the last [`Spectral::forcing_velocity`]'s force to
+    /// the combination that [`Spectral::forcing_vorticity_add`] adds to ω: a solver that
+    /// combines the responses of its iterations applies the sum once, without transforming
+    /// the summed force again.
+    pub fn forcing_accumulate(&mut self, alpha: f64) {
+        for (acc, wh) in self.force_sum_hat.iter_mut().zip(self.force_hat.iter()) {
+            acc.par_iter_mut()
+                .zip(wh.par_iter())
+                .for_each(|(a, w)| *a += *w * alpha);
         }
     }
 
@@ -229,9 +254,11 @@ impl Spectral {
         }
     }
 
-    /// ω += ∇×(m R f) for the force f of the last [`Spectral::forcing_velocity`] (spectral
-    /// curl), whose velocity is the u it returned: the velocity of the new vorticity is the old
-    /// one's plus u exactly. `scratch` is one real field. Forgets the cached vorticity spectrum.
+    /// ω += Σ α_i ∇×(m R f_i) for the forces f_i accumulated since [`Spectral::forcing_reset`]
+    /// ([`Spectral::forcing_accumulate`]; spectral curl), whose velocity is Σ α_i u_i of the
+    /// u_i [`Spectral::forcing_velocity`] returned: the velocity of the new vorticity is the
+    /// old one's plus that sum exactly. `scratch` is one real field. Forgets the cached
+    /// vorticity spectrum.
     pub fn forcing_vorticity_add(&mut self, omega: &mut [Vec<f64>], scratch: &mut [f64]) {
         assert_eq!(
             self.force_hat.len(),
@@ -239,7 +266,7 @@ impl Spectral {
             "spectral: reserve_forcing first"
         );
         self.check_field(omega, self.omega_hat.len(), "omega");
-        for (oc, wh) in omega.iter_mut().zip(self.force_hat.iter()) {
+        for (oc, wh) in omega.iter_mut().zip(self.force_sum_hat.iter()) {
             self.fft.inverse(Some(wh), &mut self.work, scratch);
             oc.par_iter_mut()
                 .zip(scratch.par_iter())

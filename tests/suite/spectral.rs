@@ -793,12 +793,26 @@ fn forcing_vorticity_carries_the_forcing_velocity() {
         // A divergence-free vorticity (the curl of a random velocity, spectrally).
         let mut omega = vec![vec![0.0; grid.len()]; ncomp];
         let mut w0 = f.clone();
+        s.forcing_reset();
         s.forcing_velocity(&f, 0.0, &mut w0);
+        s.forcing_accumulate(1.0);
         s.forcing_vorticity_add(&mut omega, &mut vec![0.0; grid.len()]);
         let mut u0 = vec![vec![0.0; grid.len()]; dim];
         s.velocity(&mut omega, 1, [0.0; 3], &mut u0);
-        let mut du = vec![vec![0.0; grid.len()]; dim];
-        s.forcing_velocity(&f, 0.002, &mut du);
+        // A combination of two forcings' responses, as the no-slip's iterations make one:
+        // du = 0.7 K f + 0.3 K g, and its vorticity from the accumulated spectra.
+        let g: Vec<Vec<f64>> = (0..dim).map(|_| rng.field(grid.len())).collect();
+        let (mut kf, mut kg) = (f.clone(), f.clone());
+        s.forcing_reset();
+        s.forcing_velocity(&f, 0.002, &mut kf);
+        s.forcing_accumulate(0.7);
+        s.forcing_velocity(&g, 0.002, &mut kg);
+        s.forcing_accumulate(0.3);
+        let du: Vec<Vec<f64>> = kf
+            .iter()
+            .zip(&kg)
+            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| 0.7 * x + 0.3 * y).collect())
+            .collect();
         s.forcing_vorticity_add(&mut omega, &mut vec![0.0; grid.len()]);
         let mut u1 = vec![vec![0.0; grid.len()]; dim];
         s.velocity(&mut omega, 2, [0.0; 3], &mut u1);
