@@ -388,6 +388,19 @@ fn wait_for_checkpoint(child: &mut std::process::Child, dir: &Path, t: f64) -> C
     }
 }
 
+/// The restarted run's log (`log`) ends with as many steps as the straight run's in `straight`.
+fn assert_same_step_count(straight: &std::path::Path, log: &str) {
+    let straight_log = std::fs::read_to_string(straight.join("log.txt")).unwrap();
+    let steps = |l: &str| {
+        l.lines()
+            .filter_map(|x| x.split("finished: ").nth(1))
+            .filter_map(|x| x.split(' ').next()?.parse::<usize>().ok())
+            .next_back()
+    };
+    assert!(steps(&straight_log).is_some(), "{straight_log}");
+    assert_eq!(steps(log), steps(&straight_log), "{log}");
+}
+
 #[test]
 fn cli_restart_continues_the_run_bit_for_bit() {
     let d = tmp("cli");
@@ -417,16 +430,7 @@ fn cli_restart_continues_the_run_bit_for_bit() {
     assert_same_outputs(&straight, &stopped);
     let log = std::fs::read_to_string(stopped.join("log.txt")).unwrap();
     assert!(log.contains("restart from"), "{log}");
-    // As many steps as the straight run took.
-    let straight_log = std::fs::read_to_string(straight.join("log.txt")).unwrap();
-    let steps = |l: &str| {
-        l.lines()
-            .filter_map(|x| x.split("finished: ").nth(1))
-            .filter_map(|x| x.split(' ').next()?.parse::<usize>().ok())
-            .next_back()
-    };
-    assert!(steps(&straight_log).is_some(), "{straight_log}");
-    assert_eq!(steps(&log), steps(&straight_log), "{log}");
+    assert_same_step_count(&straight, &log);
     // The checkpoint at t = 0.2 was deleted once two later ones were written (t = 0.21 and
     // 0.28 with checkpoints every 0.07, and the end, 0.3).
     assert!(!ck.exists(), "{} was kept", ck.display());
@@ -1053,16 +1057,7 @@ fn hdf5_restart_reproduces_the_run(formats: &str, name: &str) {
     );
     let log = std::fs::read_to_string(stopped.join("log.txt")).unwrap();
     assert_eq!(log.matches("restart from").count(), 2, "{log}");
-    // As many steps as the straight run took.
-    let straight_log = std::fs::read_to_string(straight.join("log.txt")).unwrap();
-    let steps = |l: &str| {
-        l.lines()
-            .filter_map(|x| x.split("finished: ").nth(1))
-            .filter_map(|x| x.split(' ').next()?.parse::<usize>().ok())
-            .next_back()
-    };
-    assert!(steps(&straight_log).is_some(), "{straight_log}");
-    assert_eq!(steps(&log), steps(&straight_log), "{log}");
+    assert_same_step_count(&straight, &log);
     let _ = std::fs::remove_dir_all(&d);
 }
 
