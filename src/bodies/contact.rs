@@ -117,22 +117,10 @@ pub fn zeta(s: f64) -> f64 {
     }
 }
 
-/// (ρJ)⁻¹ of a body of density `rho` in state `s` (J from χ): in 2D only the rotation about z
-/// (the x and y rows are zero); zero where J is singular (an empty body).
+/// (ρJ)⁻¹ of a body of density `rho` in state `s` (J from χ; see
+/// [`crate::bodies::integrals::inertia_inverse`]).
 pub fn inverse_inertia(dim: usize, rho: f64, s: &crate::bodies::RigidState) -> glam::DMat3 {
-    let jw = rho * s.inertia;
-    if dim == 2 {
-        let jz = jw.z_axis.z;
-        glam::DMat3::from_diagonal(glam::DVec3::new(
-            0.0,
-            0.0,
-            if jz > 0.0 { 1.0 / jz } else { 0.0 },
-        ))
-    } else if jw.determinant().abs() > 0.0 {
-        jw.inverse()
-    } else {
-        glam::DMat3::ZERO
-    }
+    crate::bodies::integrals::inertia_inverse(dim, rho * s.inertia)
 }
 
 /// The change of velocity and angular velocity the step's contact force and torque give a

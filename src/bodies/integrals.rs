@@ -46,15 +46,26 @@ pub fn rigid_region(phi: f64) -> f64 {
     if phi > 0.0 { 1.0 } else { 0.0 }
 }
 
-/// J⁻¹ l: in 2D about z only (J_zz); zero where J is singular (an empty body).
+/// J⁻¹: in 2D about z only (the x and y rows are zero); zero where J is singular (an empty
+/// body).
+pub fn inertia_inverse(dim: usize, j: DMat3) -> DMat3 {
+    if dim == 2 {
+        let jz = j.z_axis.z;
+        DMat3::from_diagonal(DVec3::new(0.0, 0.0, if jz > 0.0 { 1.0 / jz } else { 0.0 }))
+    } else if j.determinant().abs() > 0.0 {
+        j.inverse()
+    } else {
+        DMat3::ZERO
+    }
+}
+
+/// J⁻¹ l ([`inertia_inverse`]; in 2D by one division).
 pub fn solve_inertia(dim: usize, j: DMat3, l: DVec3) -> DVec3 {
     if dim == 2 {
         let jz = j.z_axis.z;
         DVec3::new(0.0, 0.0, if jz > 0.0 { l.z / jz } else { 0.0 })
-    } else if j.determinant().abs() > 0.0 {
-        j.inverse() * l
     } else {
-        DVec3::ZERO
+        inertia_inverse(dim, j) * l
     }
 }
 
