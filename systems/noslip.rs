@@ -18,16 +18,20 @@
 //! J_E,i its inertia. The bodies take the reaction within the solve: with the reaction lagged a
 //! step, a sphere of density 1.1 blew up. Eliminating V' and Ω' leaves
 //! (W K W + W B M_E⁻¹ B^T W) f = W (ū - u) (B the rigid modes), symmetric and positive for
-//! E_i > 0, solved by conjugate gradients from f = 0 and stopped when an iteration changes
-//! the force by less than [`TOLERANCE`] of the bodies' hydrodynamic impulse over the step, or
-//! after [`MAX_ITERATIONS`]. This is the iterative Brinkman penalization of Hejlesen,
+//! E_i > 0, solved by conjugate gradients. When every body barely moves ([`WARM_SHIFT`]) the
+//! solve starts from the last step's force and stops when the slip left is below
+//! [`SLIP_TOLERANCE`] of the slip the step made; otherwise it starts from zero and stops when
+//! an iteration changes the force by less than [`TOLERANCE`] of the bodies' hydrodynamic
+//! impulse over the step; both after at most [`MAX_ITERATIONS`]. This is the iterative
+//! Brinkman penalization of Hejlesen,
 //! Koumoutsakos, Leonard & Walther (J. Comput. Phys. 280, 2015) written as the linear system of
 //! Gillis, Winckelmans & Chatelain (J. Comput. Phys. 347, 2017), with the bodies' recoil inside
 //! it (the fictitious-domain coupling of Glowinski et al., J. Comput. Phys. 169, 2001).
 //!
 //! Measured (settling sphere of density 2 in a periodic box against Hasimoto, h = 1/32, 3.2
-//! cells per radius; docs/numerics.md): U/U_H = 0.988 / 0.990 / 0.993 at diffusion numbers
-//! 0.125 / 0.5 / 2 (0.83 / 1.00 / 1.52 with the penalization alone) and within 0.4% over band
+//! cells per radius; docs/numerics.md): solved to the end, U/U_H = 0.9733 / 0.9732 / 0.9738 at
+//! diffusion numbers 0.125 / 0.5 / 2 (0.83 / 1.00 / 1.52 with the penalization alone), and
+//! 0.9786 at h = 1/48, 0.997 at 1/64; within 0.4% over band
 //! half-widths of 0.5 to 2 cells (1.17 to 0.77 before). With m = 1 (the spectral curl) it fell
 //! 10% too fast at h = 1/32 and 5.6% at 1/48: a sharp forcing seen through the spectral curl
 //! acts as if the wall were half a cell inside the surface. With the virtual mass, bodies
@@ -44,24 +48,40 @@ use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-/// The solve stops when the force increment of an iteration is below this fraction of the
-/// bodies' hydrodynamic impulse over the step (Hejlesen et al. 2015 stop at 1% of the force;
-/// CubismUP_3D at 0.2%, which the settling sphere does not need: 0.9900 against 0.9866 of
-/// Hasimoto at density 2).
+/// While some body moves faster than [`WARM_SHIFT`], the solve stops when the force increment
+/// of an iteration is below this fraction of the bodies' hydrodynamic impulse over the step
+/// (Hejlesen et al. 2015 stop at 1% of the force; CubismUP_3D at 0.2%), or after
+/// [`MAX_ITERATIONS`].
 pub const TOLERANCE: f64 = 1e-2;
 
-/// At most this many iterations a step. A sphere at 3.2 cells per radius and ν Δt / h² of
-/// 0.125 to 2 needs 5 to 8 to meet [`TOLERANCE`]; stopped at 6 it settles at 0.988 / 0.992 /
-/// 0.996 of Hasimoto at diffusion numbers 0.125 / 0.5 / 2 (0.988 / 0.990 / 0.993 at 8). At
-/// ν Δt / h² well below 1 (dkt: 0.2) the slip the diffusion leaves is a grid-scale layer, which
-/// the operator transmits weakly (m → 0 at the Nyquist wavenumber): the force increments keep
-/// oscillating at 2-10% of the force for 20 iterations while the force itself stays within 3%
-/// after the fourth. Each iteration costs about 1.7 FFT floors (3 forward and 3 inverse
-/// transforms and the spectral passes); the flow takes each iteration's response as it comes
-/// and the vorticity of their sum at the end (3 inverse transforms), so the solution is never
-/// transformed again. Warm-started from the last step's force, the settling sphere needs one
-/// iteration a step, but then settles at 0.979 of Hasimoto (0.980 at h = 1/48): the converged
-/// discrete wall, not the 0.99 the truncated solve gives; dkt keeps its six.
+/// When every body moves slower than [`WARM_SHIFT`], the solve is warm-started and stops when
+/// the slip left on the rigid regions is below this fraction of the slip the step made (the
+/// norm over their nodes): it is then solved, in about one iteration a step. A settling sphere
+/// (density 2, h = 1/32, 3.2 cells per radius) moves at 0.9742 of Hasimoto so, and at 0.9733 /
+/// 0.9732 / 0.9738 at diffusion numbers 0.125 / 0.5 / 2 solved to the end: the solved
+/// no-slip does not depend on the time step. Stopped on the force increment after at most six
+/// iterations it moved at 0.988 / 0.992 / 0.996: the step dependence of a truncated solve.
+pub const SLIP_TOLERANCE: f64 = 1e-3;
+
+/// A body whose surface moves less than this fraction of a cell over the step starts from the
+/// last step's force on the nodes it keeps (a warm start, scaled by least squares so that it
+/// never leaves more slip than a start from zero): the settling sphere then needs 544
+/// iterations over 512 steps. A faster body starts from zero: at dkt's speeds (0.8 cells a
+/// step) the last force, seen on nodes the surface has left, removed 10% of the slip at its
+/// best scale.
+pub const WARM_SHIFT: f64 = 0.05;
+
+/// At most this many iterations a step. From zero, a sphere at 3.2 cells per radius and
+/// ν Δt / h² of 0.125 to 2 needs 5 to 8 to meet [`TOLERANCE`], and does not meet
+/// [`SLIP_TOLERANCE`] in 30 at 0.125 (the slip stalls at 1-4%; at 0.5 it reaches 0.4% in 27).
+/// At ν Δt / h² well below 1 (dkt: about 0.06) the slip the transport leaves is a grid-scale
+/// layer, which the operator transmits weakly (m → 0 at the Nyquist wavenumber): after six
+/// iterations 20-50% of it is left, after thirty 4-9%. (The part of the slip that is a centred
+/// gradient on the rigid nodes, which no force removes, is only 1% of it: removing it first
+/// did not change the stall; nor did preconditioning with the inverse of m R.) Each iteration
+/// costs about 1.7 FFT floors (3 forward and 3 inverse transforms and the spectral passes);
+/// the flow takes each iteration's response as it comes and the vorticity of their sum at the
+/// end (3 inverse transforms), so the solution is never transformed again.
 pub const MAX_ITERATIONS: usize = 6;
 
 /// The solver's scratch (allocated once) and its last iteration count. The unknowns live on
@@ -87,8 +107,28 @@ pub struct NoSlip {
     scratch: Vec<f64>,
     /// The Newton-Euler bodies of this step.
     bodies: Vec<Recoil>,
+    /// The last solve's force on its nodes (grid index, force): the next solve's first guess
+    /// on the nodes of the bodies that barely move ([`WARM_SHIFT`]). Kept in a checkpoint.
+    warm: Vec<(usize, DVec3)>,
     /// Iterations of the last solve (0 when it did not run).
     pub iterations: usize,
+}
+
+/// A checkpoint keeps the last force (the warm start's), so a restart continues as the run.
+impl crate::schedule::CheckpointPart for NoSlip {
+    type Part = Vec<(usize, [f64; 3])>;
+    fn save_part(&self) -> Self::Part {
+        self.warm.iter().map(|&(g, f)| (g, f.to_array())).collect()
+    }
+    fn restore_part(&mut self, part: Self::Part) {
+        let n = self.taken.len();
+        self.warm.clear();
+        self.warm.extend(
+            part.into_iter()
+                .filter(|&(g, _)| g < n)
+                .map(|(g, f)| (g, DVec3::from_array(f))),
+        );
+    }
 }
 
 /// One Newton-Euler body in the solve.
@@ -107,6 +147,9 @@ struct Recoil {
     /// The momentum and angular momentum the fluid has taken so far, ρ_F Σ x h^d, ρ_F Σ r × x h^d.
     force: DVec3,
     torque: DVec3,
+    /// Whether its surface moves less than [`WARM_SHIFT`] of a cell over the step (its nodes
+    /// start from the last force).
+    warm: bool,
     /// Its radius of gyration (torque over it compares with force).
     gyration: f64,
     /// The fluid's impulse on the body earlier in the step (`rigid_velocity`: the projected
@@ -132,6 +175,7 @@ impl NoSlip {
             kp_grid: field(),
             scratch: vec![0.0; n],
             bodies: Vec::new(),
+            warm: Vec::with_capacity(n),
             iterations: 0,
         }
     }
@@ -183,6 +227,7 @@ pub fn noslip(
             continue;
         }
         let start = ns.nodes.len();
+        let mut reach = 0.0f64;
         let [dx, dy, _] = patch.dims;
         for row in 0..patch.len() / dx {
             let (b, c) = (row % dy, row / dy);
@@ -199,6 +244,7 @@ pub fn noslip(
                 let pos = grid.pos(i, j, k);
                 let rv = DVec3::new(pos[0], pos[1], pos[2]) - state.centroid;
                 let ubar = state.velocity + state.angular_velocity.cross(rv);
+                reach = reach.max(ubar.length());
                 let mut u = DVec3::ZERO;
                 for q in 0..dim {
                     u[q] = fields.u[q][g];
@@ -223,6 +269,7 @@ pub fn noslip(
             p_torque: DVec3::ZERO,
             force: DVec3::ZERO,
             torque: DVec3::ZERO,
+            warm: reach * time.dt < WARM_SHIFT * grid.h,
             gyration: gyration.max(grid.h),
             impulse: hydro.force * time.dt,
             angular_impulse: hydro.torque * time.dt,
@@ -232,21 +279,57 @@ pub fn noslip(
         return;
     }
     let m = ns.nodes.len();
-    ns.x.clear();
-    ns.x.resize(m, DVec3::ZERO);
-    ns.p.clear();
-    ns.p.extend_from_slice(&ns.r);
-    ns.ap.clear();
-    ns.ap.resize(m, DVec3::ZERO);
-    for c in ns.p_grid.iter_mut() {
-        c.par_iter_mut().for_each(|v| *v = 0.0);
-    }
     let nu_dt = params.nu * time.dt;
     let (omega, u, _) = fields.next_version_parts();
     spectral.forcing_reset();
+    for c in ns.p_grid.iter_mut() {
+        c.par_iter_mut().for_each(|v| *v = 0.0);
+    }
+    ns.ap.clear();
+    ns.ap.resize(m, DVec3::ZERO);
+    // The first guess: the last force on the nodes of the bodies that barely move, zero
+    // elsewhere.
+    ns.x.clear();
+    ns.x.resize(m, DVec3::ZERO);
+    let warm = warm_start(ns, dim);
+    let rr_step = dot(&ns.r, &ns.r);
+    let mut applied = false;
+    if warm {
+        // Scaled by least squares, x0 = s x_last with s = (b·A x_last)/|A x_last|²: never
+        // more slip than from zero.
+        ns.p.clear();
+        ns.p.extend_from_slice(&ns.x);
+        apply(ns, &mut spectral, nu_dt, dim, dv, rho_f);
+        let (ba, aa) = (dot(&ns.r, &ns.ap), dot(&ns.ap, &ns.ap));
+        let scale = if aa > 0.0 && ba > 0.0 { ba / aa } else { 0.0 };
+        if scale > 0.0 {
+            for l in 0..m {
+                ns.x[l] *= scale;
+                ns.r[l] -= scale * ns.ap[l];
+            }
+            for rec in ns.bodies.iter_mut() {
+                rec.force = rec.p_force * (scale * rho_f);
+                rec.torque = rec.p_torque * (scale * rho_f);
+            }
+            add_response(u, &ns.kp_grid, scale);
+            spectral.forcing_accumulate(scale);
+            applied = true;
+        } else {
+            ns.x.iter_mut().for_each(|x| *x = DVec3::ZERO);
+        }
+    }
+    ns.p.clear();
+    ns.p.extend_from_slice(&ns.r);
     let mut rr = dot(&ns.r, &ns.r);
+    // Every body slow: solved to SLIP_TOLERANCE; else stopped on the force increment.
+    let solved = ns.bodies.iter().all(|b| b.warm);
+    let stop = if solved {
+        SLIP_TOLERANCE * SLIP_TOLERANCE * rr_step
+    } else {
+        0.0
+    };
     for it in 0..MAX_ITERATIONS {
-        if rr <= 0.0 {
+        if rr <= stop || rr <= 0.0 {
             break;
         }
         // ap = W K p + W B M_E⁻¹ B^T p.
@@ -263,8 +346,9 @@ pub fn noslip(
         // The flow takes α K p now (K x is never formed again), its vorticity at the end.
         add_response(u, &ns.kp_grid, alpha);
         spectral.forcing_accumulate(alpha);
+        applied = true;
         ns.iterations = it + 1;
-        // The bodies' force (the momentum the fluid takes, ρ_F Σ x h^d) and its increment.
+        // The momentum the fluid takes, ρ_F Σ x h^d, its moment, and their increments.
         let (mut df, mut f) = (0.0, 0.0);
         for rec in ns.bodies.iter_mut() {
             let (inc_f, inc_l) = (
@@ -277,7 +361,7 @@ pub fn noslip(
             f += (rec.impulse - rec.force).length()
                 + (rec.angular_impulse - rec.torque).length() / rec.gyration;
         }
-        if df <= TOLERANCE * f {
+        if !solved && df <= TOLERANCE * f {
             break;
         }
         let rr_new = dot(&ns.r, &ns.r);
@@ -290,7 +374,11 @@ pub fn noslip(
     for &(g, _) in &ns.nodes {
         ns.taken[g] = false;
     }
-    if ns.iterations == 0 {
+    // The next step's first guess.
+    ns.warm.clear();
+    ns.warm
+        .extend(ns.nodes.iter().zip(&ns.x).map(|(&(g, _), &x)| (g, x)));
+    if !applied {
         return;
     }
     // The vorticity of the force the flow took; the bodies take the reaction.
@@ -306,6 +394,35 @@ pub fn noslip(
         hydro.force -= rec.force / dt;
         hydro.torque -= rec.torque / dt;
     }
+}
+
+/// Puts the last force into `ns.x` on the nodes of the bodies marked warm (`ns.x` is zero on
+/// entry and `ns.p_grid` zero on entry and exit); whether any node got a guess.
+fn warm_start(ns: &mut NoSlip, dim: usize) -> bool {
+    if !ns.bodies.iter().any(|b| b.warm) || ns.warm.is_empty() {
+        return false;
+    }
+    for &(g, f) in &ns.warm {
+        for q in 0..dim {
+            ns.p_grid[q][g] = f[q];
+        }
+    }
+    let mut any = false;
+    for rec in ns.bodies.iter().filter(|b| b.warm) {
+        let (lo, hi) = rec.range;
+        for (&(g, _), x) in ns.nodes[lo..hi].iter().zip(&mut ns.x[lo..hi]) {
+            for q in 0..dim {
+                x[q] = ns.p_grid[q][g];
+            }
+            any |= *x != DVec3::ZERO;
+        }
+    }
+    for &(g, _) in &ns.warm {
+        for q in 0..dim {
+            ns.p_grid[q][g] = 0.0;
+        }
+    }
+    any
 }
 
 /// u += α K p over the whole grid.
@@ -381,6 +498,7 @@ impl crate::schedule::Plugin for NoSlipPlugin {
             |mut s: ResMut<Spectral>| s.reserve_forcing(),
         )?;
         ctx.add_system(PhysicsSet::NoSlip, "noslip", noslip)?;
+        ctx.checkpoint_part::<NoSlip>("noslip", 1)?;
         Ok(())
     }
 }

@@ -25,7 +25,7 @@
 //! * the state the systems keep, registered by their plugins
 //!   ([`crate::schedule::PluginContext::checkpoint_resource`] and `checkpoint_part`): the
 //!   diagnostics' last sample, the transport's split order, the pressure coupling's state, the
-//!   free surface, a user plugin's resources. One record per resource, its name, layout
+//!   free surface, the no-slip's last force, a user plugin's resources. One record per resource, its name, layout
 //!   version and serde bytes, so this file knows no system: a record missing, left over or of
 //!   another version is refused by name.
 //!

@@ -4,7 +4,7 @@
 use super::common::{MODEL, dynamic_body};
 use crate::scene::Scene;
 use crate::sim::engine::Simulation;
-use crate::validate::{Case, Report, Row, RunTime};
+use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
 use std::f64::consts::PI;
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -17,7 +17,20 @@ pub const CASE: Case = Case {
     full_time: RunTime::Long,
     quick_time: RunTime::Minutes,
     run: stokes_settling,
-    known_failures: &[],
+    known_failures: &[
+        KnownFailure {
+            row: "h = 1/32 (3.2 cells per radius), density",
+            quick: true,
+            full: true,
+            why: "-2.6% at every density (0.9744 / 0.9744 / 0.9741 / 0.9745 at 0.01 / 0.5 / 2 / 20) since a body that barely moves has its no-slip solved (systems/noslip.rs, issue 35: warm-started, to 1e-3 of the step's slip): the solved discrete wall at 3.2 cells per radius, the same at diffusion numbers 0.125 / 0.5 / 2 (0.9731 / 0.9741 / 0.9771). The six-iteration truncated solve before gave 0.99 by the truncation's luck and depended on the step (0.988 / 0.992 / 0.996). Solved, density 2 gives 0.9786 at h = 1/48 and 0.997 at 1/64: the wall converges, slowly at first; issue 35",
+        },
+        KnownFailure {
+            row: "h = 1/48 (4.8 cells per radius), density",
+            quick: false,
+            full: true,
+            why: "density 2 solved to the end gives 0.9786 at h = 1/48 (-2.1%; 0.9744 at 1/32, 0.997 at 1/64), the solved discrete wall since issue 35 solves the no-slip of a body that barely moves; the other densities were not run at 1/48 with this solve (they agree with density 2 within 0.05% at 1/32); issue 35",
+        },
+    ],
 };
 
 /// Velocity along gravity of a sphere of radius 0.1 and density `rho` settling in a periodic
