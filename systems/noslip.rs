@@ -31,7 +31,8 @@
 //! Measured (settling sphere of density 2 in a periodic box against Hasimoto, h = 1/32, 3.2
 //! cells per radius; docs/numerics.md): solved to the end, U/U_H = 0.9733 / 0.9732 / 0.9738 at
 //! diffusion numbers 0.125 / 0.5 / 2 (0.83 / 1.00 / 1.52 with the penalization alone), and
-//! 0.9786 at h = 1/48, 0.997 at 1/64; within 0.4% over band
+//! 0.9742 again at h = 1/48 (warm-started, every density 0.972-0.975 at both grids: a deficit
+//! that does not shrink with h, cause open); within 0.4% over band
 //! half-widths of 0.5 to 2 cells (1.17 to 0.77 before). With m = 1 (the spectral curl) it fell
 //! 10% too fast at h = 1/32 and 5.6% at 1/48: a sharp forcing seen through the spectral curl
 //! acts as if the wall were half a cell inside the surface. With the virtual mass, bodies
