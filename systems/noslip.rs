@@ -31,8 +31,10 @@
 //! Measured (settling sphere of density 2 in a periodic box against Hasimoto, h = 1/32, 3.2
 //! cells per radius; docs/numerics.md): solved to the end, U/U_H = 0.9733 / 0.9732 / 0.9738 at
 //! diffusion numbers 0.125 / 0.5 / 2 (0.83 / 1.00 / 1.52 with the penalization alone), and
-//! 0.9742 again at h = 1/48 (warm-started, every density 0.972-0.975 at both grids: a deficit
-//! that does not shrink with h, cause open); within 0.4% over band
+//! 0.9742 again at h = 1/48 and 0.9938 at 1/64 (warm-started); centred off the nodes the same
+//! sphere moves at 1.0133 at h = 1/32: the staircase of rigid nodes sets the wall, within a few
+//! per cent at 3.2 cells per radius depending on where the surface cuts the grid; within 0.4%
+//! over band
 //! half-widths of 0.5 to 2 cells (1.17 to 0.77 before). With m = 1 (the spectral curl) it fell
 //! 10% too fast at h = 1/32 and 5.6% at 1/48: a sharp forcing seen through the spectral curl
 //! acts as if the wall were half a cell inside the surface. With the virtual mass, bodies
