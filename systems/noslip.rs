@@ -34,8 +34,7 @@
 //! 0.9742 again at h = 1/48 and 0.9938 at 1/64 (warm-started); centred off the nodes the same
 //! sphere moves at 1.0133 at h = 1/32: the staircase of rigid nodes sets the wall, within a few
 //! per cent at 3.2 cells per radius depending on where the surface cuts the grid; within 0.4%
-//! over band
-//! half-widths of 0.5 to 2 cells (1.17 to 0.77 before). With m = 1 (the spectral curl) it fell
+//! over band half-widths of 0.5 to 2 cells (1.17 to 0.77 before). With m = 1 (the spectral curl) it fell
 //! 10% too fast at h = 1/32 and 5.6% at 1/48: a sharp forcing seen through the spectral curl
 //! acts as if the wall were half a cell inside the surface. With the virtual mass, bodies
 //! lighter than the fluid settle (rise) as the heavy ones: 0.994 of Hasimoto at densities
@@ -326,13 +325,14 @@ pub fn noslip(
     let mut rr = dot(&ns.r, &ns.r);
     // Every body slow: solved to SLIP_TOLERANCE; else stopped on the force increment.
     let solved = ns.bodies.iter().all(|b| b.warm);
+    // (0 when not solved: only an exact solution stops it before the force increment does.)
     let stop = if solved {
         SLIP_TOLERANCE * SLIP_TOLERANCE * rr_step
     } else {
         0.0
     };
     for it in 0..MAX_ITERATIONS {
-        if rr <= stop || rr <= 0.0 {
+        if rr <= stop {
             break;
         }
         // ap = W K p + W B M_E⁻¹ B^T p.

@@ -25,9 +25,9 @@
 //! * the state the systems keep, registered by their plugins
 //!   ([`crate::schedule::PluginContext::checkpoint_resource`] and `checkpoint_part`): the
 //!   diagnostics' last sample, the transport's split order, the pressure coupling's state, the
-//!   free surface, the no-slip's last force, a user plugin's resources. One record per resource, its name, layout
-//!   version and serde bytes, so this file knows no system: a record missing, left over or of
-//!   another version is refused by name.
+//!   free surface, the no-slip's last force, a user plugin's resources. One record per
+//!   resource, its name, layout version and serde bytes, so this file knows no system: a
+//!   record missing, left over or of another version is refused by name.
 //!
 //! Format: the magic `TUMBLECK` and the format version (u32, little-endian), which say what
 //! the file is before anything else is read; then, serde in the postcard encoding, the header
