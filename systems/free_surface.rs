@@ -19,6 +19,8 @@
 //!   stepping. Carried instead by the transport's mid-step velocity extrapolated from u^n and
 //!   u^{n-1} (before this step's baroclinic increment), a standing wave at ratio 1:10 grew by
 //!   12% per half period.
+//!   In momentum form (`transport`) φ_w rides the particles that carry the mass and the
+//!   momentum, with their weights, and this system does not move it again.
 //! * Redistancing: φ_w is kept a signed distance within the band (|φ_w| ≤ `band`, clipped
 //!   beyond) by pseudo-time iterations of ∂φ/∂τ + sgn(φ⁰)(|∇φ| - 1) = 0 (Sussman, Smereka &
 //!   Osher 1994) with Godunov's upwind |∇φ|, and the subcell fix of Russo & Smereka
@@ -403,6 +405,12 @@ pub fn free_surface(
         (_, true) => &[2, 1, 0],
     };
     let u = &fields.u;
+    // In momentum form the particles of the transport carried φ_w with the mass and momentum.
+    let axes = if params.momentum_form() {
+        &[][..]
+    } else {
+        axes
+    };
     for &axis in axes {
         sweep(
             &grid,

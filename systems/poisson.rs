@@ -7,10 +7,15 @@
 //! uniform background velocity. It replaces the mid-step velocity transport left in `u` (the
 //! velocity before it is kept as the previous one, for the mid-step extrapolation in transport
 //! and for ∂u/∂t in the baroclinic term).
+//!
+//! In momentum form (a free surface) the velocity is carried, not solved for: this step then
+//! only takes the vorticity of it, ω = ∇×u by centred differences, for the time step, the
+//! grid-scale dissipation's rate, the diagnostics and the output.
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::solvers::Spectral;
 use bevy_ecs::prelude::*;
+use rayon::prelude::*;
 
 /// The Poisson system.
 pub fn poisson(
@@ -23,6 +28,21 @@ pub fn poisson(
     fields.dt_prev = time.dt;
     let (omega, u, version) = fields.same_version_parts();
     spectral.velocity(omega, version, params.background, u);
+}
+
+/// The momentum form's step: ω = ∇×u (centred differences) of the carried velocity.
+pub fn vorticity(
+    grid: Res<crate::base::grid::Grid>,
+    time: Res<SimTime>,
+    mut fields: ResMut<Fields>,
+) {
+    let fields = &mut *fields;
+    fields.dt_prev = time.dt;
+    let (omega, u, _) = fields.next_version_parts();
+    for w in omega.iter_mut() {
+        w.par_iter_mut().for_each(|x| *x = 0.0);
+    }
+    crate::solvers::operators::curl_add(&grid, u, omega);
 }
 
 /// Velocity from vorticity: at startup in every run, every step in a fluid run.
@@ -38,7 +58,10 @@ impl crate::schedule::Plugin for PoissonPlugin {
         use crate::schedule::PhysicsSet;
         ctx.share_resource(|w| Spectral::new(w.resource::<crate::base::grid::Grid>()));
         ctx.add_startup_system_in(PhysicsSet::Poisson, "poisson", poisson)?;
-        if ctx.mode().fluid() {
+        let momentum = ctx.world.resource::<Params>().momentum_form();
+        if ctx.mode().fluid() && momentum {
+            ctx.add_system(PhysicsSet::Poisson, "vorticity", vorticity)?;
+        } else if ctx.mode().fluid() {
             ctx.add_system(PhysicsSet::Poisson, "poisson", poisson)?;
         }
         Ok(())

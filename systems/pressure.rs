@@ -98,11 +98,16 @@ pub struct PressureSolver {
     /// With a free surface: the density the projection sees, ρ (1 + λΔt χ_s) with χ_s the
     /// walls' (static bodies') characteristic function (scratch; empty otherwise).
     rigid_rho: Vec<f64>,
+    /// In momentum form: the reduced gravity's potential g·x - c per node (scratch; empty
+    /// otherwise).
+    potential: Vec<f64>,
+    /// Per-row partial sums of the potential's interface mean (scratch).
+    poisson_partial: Vec<[f64; 2]>,
 }
 
 impl PressureSolver {
     /// Zero state for `grid`; with `multigrid`, the Poisson solver's multigrid hierarchy too.
-    pub fn new(grid: &Grid, multigrid: bool, rigid_walls: bool) -> Self {
+    pub fn new(grid: &Grid, multigrid: bool, rigid_walls: bool, momentum: bool) -> Self {
         let n = grid.len();
         PressureSolver {
             poisson: VariablePoisson::new(grid, multigrid),
@@ -110,6 +115,12 @@ impl PressureSolver {
             trial: vec![vec![0.0; n]; grid.dim],
             rigid_rho: if rigid_walls {
                 vec![0.0; n]
+            } else {
+                Vec::new()
+            },
+            potential: if momentum { vec![0.0; n] } else { Vec::new() },
+            poisson_partial: if momentum {
+                vec![[0.0; 2]; n / grid.n[0]]
             } else {
                 Vec::new()
             },
@@ -132,7 +143,8 @@ fn gravity_face(phase: [f64; 2], g: f64, gg: f64) -> f64 {
     0.5 * (phase[0] + phase[1]) * g - gg
 }
 
-/// The gravity of a step: g, G = ⟨ρ_P⟩ g and Δt, for [`FaceGravity::impulse`].
+/// The gravity of a step, for [`FaceGravity::impulse`]: g, G = ⟨ρ_P⟩ g and Δt, or the
+/// reduced form.
 #[derive(Debug, Clone, Copy)]
 struct FaceGravity {
     /// The step's Δt.
@@ -141,14 +153,22 @@ struct FaceGravity {
     g: [f64; 3],
     /// G = ⟨ρ_P⟩ g, the mean pressure gradient.
     gg: [f64; 3],
+    /// The reduced form (momentum form): the force density -(g·x - c) ∇ρ_P on the faces, with
+    /// g·x - c the node field `PressureSolver::potential` (see the module doc); 1/h then.
+    reduced: Option<f64>,
 }
 
 impl FaceGravity {
-    /// Δt (ρ_P g - G)_a on the face between nodes `lo` and `hi = lo + e_a` of phase densities
-    /// `phase` ([`gravity_face`] times Δt).
+    /// The gravity impulse on the face between nodes `lo` and `hi = lo + e_a` of phase densities
+    /// `phase` and potentials `pot` (the reduced form's g·x - c; unused otherwise):
+    /// Δt (ρ_P g - G)_a ([`gravity_face`] times Δt), or in the reduced form
+    /// -Δt (pot_lo + pot_hi)/2 (ρ_P,hi - ρ_P,lo)/h.
     #[inline]
-    fn impulse(&self, a: usize, phase: [f64; 2]) -> f64 {
-        self.dt * gravity_face(phase, self.g[a], self.gg[a])
+    fn impulse(&self, a: usize, phase: [f64; 2], pot: [f64; 2]) -> f64 {
+        match self.reduced {
+            Some(inv_h) => -self.dt * 0.5 * (pot[0] + pot[1]) * (phase[1] - phase[0]) * inv_h,
+            None => self.dt * gravity_face(phase, self.g[a], self.gg[a]),
+        }
     }
 }
 
@@ -177,19 +197,109 @@ pub fn pressure(
         rigid_walls(&grid, &bodies, &bf.rho, ldt, &mut solver.rigid_rho);
         face_beta(&grid, &solver.rigid_rho, &mut solver.poisson.beta);
     }
-    let gravity = face_gravity(
+    let momentum = params.momentum_form();
+    let mut gravity = face_gravity(
         &grid,
         &mut solver.poisson,
         &bf.rho_phase,
         params.gravity,
         dt,
     );
-    node_increment(&grid, &fields.u, &bf.du, dt, &mut solver.src);
+    if momentum {
+        gravity.reduced = Some(1.0 / grid.h);
+        reduced_potential(&grid, &bodies, &bf.rho_phase, params.gravity, solver);
+        // The whole velocity is projected: it is carried, not made divergence-free by a
+        // velocity solve.
+        for (s, u) in solver.src.iter_mut().zip(&fields.u) {
+            s.par_chunks_mut(4096)
+                .zip(u.par_chunks(4096))
+                .for_each(|(s, u)| s.copy_from_slice(u));
+        }
+    } else {
+        node_increment(&grid, &fields.u, &bf.du, dt, &mut solver.src);
+    }
     divergence(&grid, solver, &bf.rho_phase, gravity);
     solve_phi(&grid, &mut solver.poisson, &mut state.phi, &mut spectral);
     project(&grid, solver, &state.phi, bf, &fields.u, gravity);
-    curl_add(&grid, &bf.du, fields.omega_mut());
+    if momentum {
+        for (u, t) in fields.u.iter_mut().zip(&solver.trial) {
+            u.par_chunks_mut(4096)
+                .zip(t.par_chunks(4096))
+                .for_each(|(u, t)| u.copy_from_slice(t));
+        }
+    } else {
+        curl_add(&grid, &bf.du, fields.omega_mut());
+    }
     excess_momentum(&grid, &bodies, bf, &solver.trial, &mut sums, state, ldt);
+}
+
+/// The reduced form's potential g·x - c at the nodes, into `solver.potential`: c is the mean
+/// of g·x over the interface (weighted by (ρ_P - min ρ_P)(max ρ_P - ρ_P), which vanishes away
+/// from it), so the potential is small where ∇ρ_P is not; inside the walls (static bodies,
+/// χ_s > 0) it is 0, so the periodic seam that runs through them makes no force.
+fn reduced_potential(
+    grid: &Grid,
+    bodies: &Query<(&Body, &GridPatch, &RigidState)>,
+    phase: &[f64],
+    g: [f64; 3],
+    solver: &mut PressureSolver,
+) {
+    let (nx, ny) = (grid.n[0], grid.n[1]);
+    let (lo, hi) = phase
+        .par_iter()
+        .fold(
+            || (f64::INFINITY, f64::NEG_INFINITY),
+            |(a, b), &r| (a.min(r), b.max(r)),
+        )
+        .reduce(
+            || (f64::INFINITY, f64::NEG_INFINITY),
+            |(a, b), (c, d)| (a.min(c), b.max(d)),
+        );
+    let gx = |row: usize, i: usize| {
+        let x = grid.pos(i, row % ny, row / ny);
+        g[0] * x[0] + g[1] * x[1] + g[2] * x[2]
+    };
+    // Per row: Σ w g·x and Σ w, summed in row order afterwards.
+    let pot = &mut solver.potential;
+    let partial = &mut solver.poisson_partial;
+    pot.par_chunks_mut(nx)
+        .zip(partial.par_iter_mut())
+        .enumerate()
+        .for_each(|(row, (o, part))| {
+            let ph = &phase[row * nx..(row + 1) * nx];
+            let mut sw = [0.0; 2];
+            for i in 0..nx {
+                let w = (ph[i] - lo) * (hi - ph[i]);
+                let v = gx(row, i);
+                o[i] = v;
+                sw[0] += w * v;
+                sw[1] += w;
+            }
+            *part = sw;
+        });
+    let (num, den) = partial
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p[0], b + p[1]));
+    let c = if den > 0.0 { num / den } else { 0.0 };
+    pot.par_iter_mut().for_each(|v| *v -= c);
+    for (body, patch, _) in bodies {
+        if !body.is_static() || patch.is_empty() {
+            continue;
+        }
+        let dx = patch.dims[0];
+        let dy = patch.dims[1];
+        let o = crate::base::grid::SyncPtr(pot.as_mut_ptr());
+        (0..patch.len() / dx).into_par_iter().for_each(|r| {
+            let (b, c) = (r % dy, r / dy);
+            for a in 0..dx {
+                if patch.chi[r * dx + a] > 0.0 {
+                    let g = patch.grid_index(grid, a, b, c);
+                    // SAFETY: distinct patch rows map to distinct grid nodes.
+                    unsafe { o.write(g, 0.0) };
+                }
+            }
+        });
+    }
 }
 
 /// The density the projection sees with a free surface: ρ (1 + λΔt χ_s) = ρ / (1 - w_s) at
@@ -260,7 +370,12 @@ fn face_gravity(
 ) -> FaceGravity {
     let rho_mean = poisson.mean(grid.n[0], phase);
     let gg: [f64; 3] = std::array::from_fn(|a| g[a] * rho_mean);
-    FaceGravity { dt, g, gg }
+    FaceGravity {
+        dt,
+        g,
+        gg,
+        reduced: None,
+    }
 }
 
 /// The node part of the increment, s = δu_pen - Δt (u·∇)u (centred differences), into `src`.
@@ -307,6 +422,12 @@ fn node_increment(grid: &Grid, u: &[Vec<f64>], du: &[Vec<f64>], dt: f64, src: &m
 fn divergence(grid: &Grid, solver: &mut PressureSolver, phase: &[f64], gravity: FaceGravity) {
     let (dim, nx, h) = (grid.dim, grid.n[0], grid.h);
     let (src, beta) = (&solver.src, &solver.poisson.beta);
+    // The reduced form's potential (the phase density stands in when it is not used).
+    let pot: &[f64] = if solver.potential.is_empty() {
+        phase
+    } else {
+        &solver.potential
+    };
     solver
         .poisson
         .rhs
@@ -316,13 +437,14 @@ fn divergence(grid: &Grid, solver: &mut PressureSolver, phase: &[f64], gravity: 
             let rn = RowNeighbours::new(grid, row);
             // The face between lo and hi = lo + e_a, from the values at both nodes and β
             // on it.
-            let face = |a: usize, s: [f64; 2], ph: [f64; 2], b: f64| {
-                0.5 * (s[0] + s[1]) + gravity.impulse(a, ph) * b
+            let face = |a: usize, s: [f64; 2], ph: [f64; 2], pt: [f64; 2], b: f64| {
+                0.5 * (s[0] + s[1]) + gravity.impulse(a, ph, pt) * b
             };
             let ph = line_at(phase, rn.c0, nx);
+            let pc = line_at(pot, rn.c0, nx);
             let (s0, b0) = (line_at(&src[0], rn.c0, nx), line_at(&beta[0], rn.c0, nx));
-            // Per axis 1 and 2: the source, phase and β rows of this row and of the rows
-            // below and above it.
+            // Per axis 1 and 2: the source, phase, potential and β rows of this row and of the
+            // rows below and above it.
             let rows = |a: usize| {
                 let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
                 (
@@ -332,20 +454,43 @@ fn divergence(grid: &Grid, solver: &mut PressureSolver, phase: &[f64], gravity: 
                         line_at(&src[a], p, nx),
                     ],
                     [line_at(phase, m, nx), line_at(phase, p, nx)],
+                    [line_at(pot, m, nx), line_at(pot, p, nx)],
                     [line_at(&beta[a], m, nx), line_at(&beta[a], rn.c0, nx)],
                 )
             };
-            let (s1, p1, b1) = rows(1);
-            let (s2, p2, b2) = if dim == 3 { rows(2) } else { (s1, p1, b1) };
+            let (s1, p1, q1, b1) = rows(1);
+            let (s2, p2, q2, b2) = if dim == 3 { rows(2) } else { (s1, p1, q1, b1) };
             for_row(nx, |i, im, ip| {
                 let mut div = 0.0;
-                div += face(0, [s0[i], s0[ip]], [ph[i], ph[ip]], b0[i])
-                    - face(0, [s0[im], s0[i]], [ph[im], ph[i]], b0[im]);
-                div += face(1, [s1[1][i], s1[2][i]], [ph[i], p1[1][i]], b1[1][i])
-                    - face(1, [s1[0][i], s1[1][i]], [p1[0][i], ph[i]], b1[0][i]);
+                div += face(0, [s0[i], s0[ip]], [ph[i], ph[ip]], [pc[i], pc[ip]], b0[i])
+                    - face(0, [s0[im], s0[i]], [ph[im], ph[i]], [pc[im], pc[i]], b0[im]);
+                div += face(
+                    1,
+                    [s1[1][i], s1[2][i]],
+                    [ph[i], p1[1][i]],
+                    [pc[i], q1[1][i]],
+                    b1[1][i],
+                ) - face(
+                    1,
+                    [s1[0][i], s1[1][i]],
+                    [p1[0][i], ph[i]],
+                    [q1[0][i], pc[i]],
+                    b1[0][i],
+                );
                 if dim == 3 {
-                    div += face(2, [s2[1][i], s2[2][i]], [ph[i], p2[1][i]], b2[1][i])
-                        - face(2, [s2[0][i], s2[1][i]], [p2[0][i], ph[i]], b2[0][i]);
+                    div += face(
+                        2,
+                        [s2[1][i], s2[2][i]],
+                        [ph[i], p2[1][i]],
+                        [pc[i], q2[1][i]],
+                        b2[1][i],
+                    ) - face(
+                        2,
+                        [s2[0][i], s2[1][i]],
+                        [p2[0][i], ph[i]],
+                        [q2[0][i], pc[i]],
+                        b2[0][i],
+                    );
                 }
                 o[i] = -h * div;
             });
@@ -379,6 +524,11 @@ fn project(
     let (dim, nx) = (grid.dim, grid.n[0]);
     let beta = &solver.poisson.beta;
     let phase = &bf.rho_phase;
+    let pot: &[f64] = if solver.potential.is_empty() {
+        phase
+    } else {
+        &solver.potential
+    };
     let trial = crate::base::grid::component_ptrs(&mut solver.trial);
     let du = crate::base::grid::component_ptrs(&mut bf.du);
     let inv_h = 1.0 / grid.h;
@@ -386,10 +536,11 @@ fn project(
         let rn = RowNeighbours::new(grid, row);
         // The face between lo and hi = lo + e_a, from the phase density and φ at both
         // nodes and β on it.
-        let face = |a: usize, ph: [f64; 2], f: [f64; 2], b: f64| {
-            (gravity.impulse(a, ph) - (f[1] - f[0]) * inv_h) * b
+        let face = |a: usize, ph: [f64; 2], pt: [f64; 2], f: [f64; 2], b: f64| {
+            (gravity.impulse(a, ph, pt) - (f[1] - f[0]) * inv_h) * b
         };
         let (ph, fc) = (line_at(phase, rn.c0, nx), line_at(phi, rn.c0, nx));
+        let pc = line_at(pot, rn.c0, nx);
         for a in 0..dim {
             let (ua, bc) = (line_at(&u[a], rn.c0, nx), line_at(&beta[a], rn.c0, nx));
             // SAFETY: the row belongs to this task only.
@@ -402,19 +553,20 @@ fn project(
             if a == 0 {
                 for_row(nx, |i, im, ip| {
                     let corr = 0.5
-                        * (face(0, [ph[im], ph[i]], [fc[im], fc[i]], bc[im])
-                            + face(0, [ph[i], ph[ip]], [fc[i], fc[ip]], bc[i]));
+                        * (face(0, [ph[im], ph[i]], [pc[im], pc[i]], [fc[im], fc[i]], bc[im])
+                            + face(0, [ph[i], ph[ip]], [pc[i], pc[ip]], [fc[i], fc[ip]], bc[i]));
                     out(i, corr);
                 });
             } else {
                 let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
                 let (phm, php) = (line_at(phase, m, nx), line_at(phase, p, nx));
+                let (pm, pp) = (line_at(pot, m, nx), line_at(pot, p, nx));
                 let (fm, fp) = (line_at(phi, m, nx), line_at(phi, p, nx));
                 let bm = line_at(&beta[a], m, nx);
                 for i in 0..nx {
                     let corr = 0.5
-                        * (face(a, [phm[i], ph[i]], [fm[i], fc[i]], bm[i])
-                            + face(a, [ph[i], php[i]], [fc[i], fp[i]], bc[i]));
+                        * (face(a, [phm[i], ph[i]], [pm[i], pc[i]], [fm[i], fc[i]], bm[i])
+                            + face(a, [ph[i], php[i]], [pc[i], pp[i]], [fc[i], fp[i]], bc[i]));
                     out(i, corr);
                 }
             }
@@ -484,7 +636,8 @@ impl crate::schedule::Plugin for PressurePlugin {
             // Walls rigid in the projection need the multigrid preconditioner (a contrast of
             // λΔt); without a hierarchy (a grid that does not coarsen) they stay fluid.
             let rigid_walls = ctx.world.resource::<Params>().free_surface && multigrid;
-            ctx.insert_resource(PressureSolver::new(&grid, multigrid, rigid_walls));
+            let momentum = ctx.world.resource::<Params>().momentum_form();
+            ctx.insert_resource(PressureSolver::new(&grid, multigrid, rigid_walls, momentum));
             // One slot per body id (the bodies are spawned before the plugins are built), so
             // the step does not allocate.
             let ids = ctx

@@ -144,6 +144,15 @@ impl Params {
         }
     }
 
+    /// Whether the flow is carried in momentum form: each particle carries mass and momentum
+    /// (and the liquid's level set) remeshed with the same weights, the velocity is their
+    /// quotient and the variable-density projection makes it divergence-free
+    /// (`systems/transport.rs`). Decided by the scene: a free surface (two fluid phases) is
+    /// carried in momentum form, one fluid in vorticity form.
+    pub fn momentum_form(&self) -> bool {
+        self.free_surface
+    }
+
     /// √(|g|/h) when the scene has a free surface, else 0: the frequency of the shortest
     /// gravity wave the grid holds (ω² = g k at k = 1/h), which an adaptive step resolves
     /// (dt ≤ c / rate, with the Lagrangian CFL number c).

@@ -4,6 +4,7 @@
 //! the particle push-and-remesh sweep along one axis ([`sweep`]). Depends only on
 //! [`crate::base`].
 
+pub mod carry;
 pub mod fft;
 pub mod multigrid;
 pub mod operators;

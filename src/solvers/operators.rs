@@ -521,6 +521,58 @@ impl Spectral {
         removed
     }
 
+    /// Implicit diffusion and top damping of each component of `f` on its own, in place:
+    /// every mode multiplied by `1/(1 + nu_dt |k|^2)` and by the factor of `damp`, no
+    /// divergence removed (the momentum form's velocity, whose projection is the variable-density
+    /// one). Returns the kinetic energy per unit volume (½⟨|f|²⟩, unit density) the damping
+    /// removed. The cached vorticity spectrum is dropped.
+    ///
+    /// Panics if a component's length is wrong.
+    pub fn diffuse_components(&mut self, f: &mut [Vec<f64>], nu_dt: f64, damp: TopDamping) -> f64 {
+        self.cached = None;
+        let diffuse = nu_dt != 0.0;
+        let damped = damp.strength != 0.0;
+        if !diffuse && !damped {
+            return 0.0;
+        }
+        let ([nx, ny, _], nxh) = self.fft.dims();
+        let kn2 = self.k_nyquist * self.k_nyquist;
+        let weight = |i: usize| if i == 0 || 2 * i == nx { 1.0 } else { 2.0 };
+        let n_total = self.fft.real_len() as f64;
+        let e_norm = 0.5 / (n_total * n_total);
+        let mut removed = 0.0;
+        for c in f.iter_mut() {
+            assert_eq!(c.len(), self.real_len(), "spectral: component length");
+            self.fft.forward(c, &mut self.work);
+            let [lx, ly, lz] = &self.tab.k2;
+            self.work
+                .par_chunks_mut(nxh)
+                .zip(self.removed_rows.par_iter_mut())
+                .enumerate()
+                .for_each(|(r, (row, out))| {
+                    let lyz = ly[r % ny] + lz[r / ny];
+                    let mut sum = 0.0;
+                    for (i, (v, &lxi)) in row.iter_mut().zip(lx).enumerate() {
+                        let l = lxi + lyz;
+                        if diffuse {
+                            *v *= 1.0 / (1.0 + nu_dt * l);
+                        }
+                        if damped {
+                            let fs = (-damp.strength * (l / kn2).powi(damp.order)).exp();
+                            sum += weight(i) * v.norm_sqr() * (1.0 - fs * fs);
+                            *v *= fs;
+                        }
+                    }
+                    *out = sum;
+                });
+            if damped {
+                removed += e_norm * self.removed_rows.iter().sum::<f64>();
+            }
+            self.fft.inverse(None, &mut self.work, c);
+        }
+        removed
+    }
+
     /// Velocity from vorticity: `Lap psi = -omega`, `u = curl psi`, spectrally exact.
     ///
     /// If the cached vorticity spectrum was made for `version` it is used as is (no forward
