@@ -11,87 +11,26 @@ use crate::bodies::free_surface::LiquidLevelSet;
 use crate::bodies::shapes::Shape;
 use crate::scene::{LiquidRegion, Scene};
 use crate::sim::engine::Simulation;
-use crate::validate::{Case, KnownFailure, PlotSpec, Report, Row, RunTime, bundled_scene};
+use crate::validate::{Case, PlotSpec, Report, Row, RunTime, bundled_scene};
 
 /// The case: what it checks, against what, and the rows known to fail.
 pub const CASE: Case = Case {
     name: "column-collapse",
-    description: "a liquid column 1 wide and 2 high collapsing at the left wall of a closed tank [0,12] x [0,3] (|g| = 1, nu = 2.35e-5: water at a = 57 mm) runs to t = 2.3; the liquid area (phi_w > 0 counted on the grid) stays within 0.5% of 2; the liquid stays one connected region (no other of more than 4 nodes) until the front reaches the far wall; the surge front at h = 1/32 and 1/64 agrees within 3% from t = 0.2; the front against Martin & Moyce's experiment is plotted only",
-    reference: "issue 34's criteria (conservation, one region, grid convergence); Martin & Moyce 1952 (Phil. Trans. R. Soc. A 244, 312-324), Fig. 3, n^2 = 2, as digitised in PySPH (pysph/examples/db_exp_data.py), plotted only",
-    full: "scenes/column-collapse.ron at h = 1/32 and 1/64, gas density 1/100 and 1/1000 (today 6 to 9 minutes on 2 cores, every run ending at a blow-up; to t = 2.3 tens of minutes)",
-    quick: "h = 1/32, gas density 1/100 and 1/1000, no grid comparison (today under 2 minutes, both runs ending at a blow-up; to t = 2.3 about 3 minutes a run)",
+    description: "a liquid column 1 wide and 2 high collapsing at the left wall of a closed tank [0,12] x [0,3] (|g| = 1, nu = 2.35e-5: water at a = 57 mm) runs to t = 2.3; the liquid area (phi_w > 0 counted on the grid) stays within 0.5% of 2; the liquid stays one connected region (no other of more than 4 nodes) until the front reaches the far wall; the tank's kinetic + potential energy never rises by more than 1% of the potential energy the column releases; the surge front at h = 1/32 and 1/64 agrees within 3% from t = 0.2; the front against Martin & Moyce's experiment is plotted only",
+    reference: "issue 34's criteria (conservation, one region, grid convergence); energy balance of a flow with no driving (dE/dt <= 0); Martin & Moyce 1952 (Phil. Trans. R. Soc. A 244, 312-324), Fig. 3, n^2 = 2, as digitised in PySPH (pysph/examples/db_exp_data.py), plotted only",
+    full: "scenes/column-collapse.ron at h = 1/32 and 1/64, gas density 1/100 and 1/1000, to t = 2.3",
+    quick: "h = 1/32, gas density 1/100 and 1/1000, to t = 2.3, no grid comparison (about 10 seconds on 2 cores)",
     full_time: RunTime::Long,
     quick_time: RunTime::Minutes,
     run: column_collapse,
-    known_failures: &[
-        KnownFailure {
-            row: "1:100, h = 1/32: liquid area",
-            quick: true,
-            full: true,
-            why: "2.0131 at t = 2.20 against 2 (+0.66%; +0.54% at t = 1.95 before the steps were evened out to land on output times, systems/diagnostics.rs land_on): within 0.5% to t = 1.9 (2.0000 at t = 0, 1.9993 at 1, 1.9956 at 1.5), then the running layer's surface, ruffled, holds a little more; issue 34",
-        },
-        KnownFailure {
-            row: "1:100, h = 1/32: one connected liquid region",
-            quick: true,
-            full: true,
-            why: "one fragment of 8 nodes at t = 1.70 (the first of more than 4 nodes at t = 1.30; at most 3 small regions besides the main one): a droplet at the plunging front; 24 fragments before the redistancing held the band's gas side; issue 34",
-        },
-        KnownFailure {
-            row: "1:1000, h = 1/32: liquid area",
-            quick: true,
-            full: true,
-            why: "2.0256 at t = 1.95 against 2 (+1.3%; +1.0% at t = 2.05 before the steps were evened out to land on output times): within 0.1% to t = 1.5 (2.0000, 2.0002 at 1, 1.9995 at 1.5), then the plunging front's ruffled surface holds more; issue 34",
-        },
-        KnownFailure {
-            row: "1:1000, h = 1/32: one connected liquid region",
-            quick: true,
-            full: true,
-            why: "one fragment of 8 nodes at t = 2.00 (the first of more than 4 nodes at t = 1.25; at most 5 small regions besides the main one): a droplet at the plunging front; 43 fragments and a blow-up at t = 2.08 before the redistancing held the band's gas side; issue 34",
-        },
-        KnownFailure {
-            row: "1:100, h = 1/64: liquid area",
-            quick: false,
-            full: true,
-            why: "not re-run with the last changes (a plain run of the scene at h = 1/64 reaches t = 2.3 at 1:100 with cc19178, and at 1:1000 its gas speeds up from t = 1.2); measured before the walls became rigid in the projection (8c61ab9): 1.928 at t = 0.70 against 2 (-3.6%); to t = 0.726 (blow-up); issue 34",
-        },
-        KnownFailure {
-            row: "1:100, h = 1/64: one connected liquid region",
-            quick: false,
-            full: true,
-            why: "not re-run with the last changes (a plain run of the scene at h = 1/64 reaches t = 2.3 at 1:100 with cc19178, and at 1:1000 its gas speeds up from t = 1.2); measured before the walls became rigid in the projection (8c61ab9): the first fragment at t = 0.30, 122 fragments of more than 4 nodes at t = 0.70 (the biggest 193 nodes, 311 regions of any size); to t = 0.726 (blow-up); issue 34",
-        },
-        KnownFailure {
-            row: "1:100: front at h = 1/32 and 1/64",
-            quick: false,
-            full: true,
-            why: "not re-run with the last changes (a plain run of the scene at h = 1/64 reaches t = 2.3 at 1:100 with cc19178, and at 1:1000 its gas speeds up from t = 1.2); measured before the walls became rigid in the projection (8c61ab9): the fronts differ by up to 15.1% (t = 0.70); compared to t = 0.70, where the h = 1/64 run blows up; issue 34",
-        },
-        KnownFailure {
-            row: "1:1000, h = 1/64: runs to t = 2.3",
-            quick: false,
-            full: true,
-            why: "with cc19178 (a plain run of the scene at h = 1/64): the gas's velocity grows from t = 1.2 (the box's mean of |u|^2/2 0.042 at t = 1, 0.17 at 1.4, 4.9 at 1.8) and the step falls to 3e-5 by t = 1.93, where the run was stopped; at fd0a01b it blew up at t = 1.512, before the walls became rigid at 0.117; issue 34",
-        },
-        KnownFailure {
-            row: "1:1000, h = 1/64: liquid area",
-            quick: false,
-            full: true,
-            why: "not re-run with the last changes (a plain run of the scene at h = 1/64 reaches t = 2.3 at 1:100 with cc19178, and at 1:1000 its gas speeds up from t = 1.2); measured before the walls became rigid in the projection (8c61ab9): 1.986 at t = 0.05 against 2 (-0.71%); to t = 0.117 (blow-up); issue 34",
-        },
-        KnownFailure {
-            row: "1:1000, h = 1/64: one connected liquid region",
-            quick: false,
-            full: true,
-            why: "not re-run with the last changes (a plain run of the scene at h = 1/64 reaches t = 2.3 at 1:100 with cc19178, and at 1:1000 its gas speeds up from t = 1.2); measured before the walls became rigid in the projection (8c61ab9): the first fragment at t = 0.05, 3 fragments of more than 4 nodes at t = 0.10 (the biggest 121 nodes); to t = 0.117 (blow-up); issue 34",
-        },
-        KnownFailure {
-            row: "1:1000: front at h = 1/32 and 1/64",
-            quick: false,
-            full: true,
-            why: "not re-run with the last changes (a plain run of the scene at h = 1/64 reaches t = 2.3 at 1:100 with cc19178, and at 1:1000 its gas speeds up from t = 1.2); measured before the walls became rigid in the projection (8c61ab9): not compared: the h = 1/64 run blows up at t = 0.117, before t = 0.2; issue 34",
-        },
-    ],
+    known_failures: &[],
 };
+
+/// The largest rise of the tank's kinetic + potential energy over an earlier sample that the
+/// energy row accepts, as a fraction of the potential energy the column releases: a flow with
+/// no driving only loses energy (dE/dt = -dissipation); this leaves room for the sampling of
+/// an energy that sloshes between kinetic and potential within a step.
+const ENERGY_RISE: f64 = 0.01;
 
 /// Sampling interval in time.
 const SAMPLE: f64 = 0.05;
@@ -186,6 +125,10 @@ struct Sample {
     /// Front of the largest region along the row [`FRONT_HEIGHT`] above the floor, from the
     /// left wall's inner face (NaN if it does not reach that row).
     front: f64,
+    /// Kinetic plus potential energy (height from the floor) of both phases inside the tank,
+    /// ∫ρ(|u|²/2 + |g| y) over the nodes strictly inside the walls, ρ from φ_w (the liquid's
+    /// density 1 and the gas's).
+    energy: f64,
 }
 
 /// The node index range strictly inside [lo, hi] along an axis (the faces must lie on nodes).
@@ -214,13 +157,27 @@ fn positive_fraction(v: [f64; 3]) -> f64 {
     }
 }
 
-fn sample(sim: &Simulation, geo: &Geometry) -> anyhow::Result<Sample> {
+fn sample(sim: &Simulation, geo: &Geometry, gas: f64) -> anyhow::Result<Sample> {
     let grid = sim.grid();
     let phi = &sim.world.resource::<LiquidLevelSet>().phi;
     let (h, nx) = (grid.h, grid.n[0]);
     let (i0, i1) = inside(geo.lo[0], geo.hi[0], grid.origin[0], h)?;
     let (j0, j1) = inside(geo.lo[1], geo.hi[1], grid.origin[1], h)?;
     let at = |i: usize, j: usize| phi[i + nx * j];
+    let params = sim.world.resource::<crate::base::fields::Params>();
+    let g = params.gravity[1].abs();
+    let eps = params.numerics.interface_cells * h;
+    let u = &sim.fields().u;
+    let mut energy = 0.0;
+    for j in j0..=j1 {
+        for i in i0..=i1 {
+            let c = i + nx * j;
+            let rho = gas + (1.0 - gas) * crate::base::kernels::heaviside(phi[c], eps);
+            let y = grid.pos(i, j, 0)[1] - geo.lo[1];
+            energy += rho * (0.5 * (u[0][c] * u[0][c] + u[1][c] * u[1][c]) + g * y);
+        }
+    }
+    energy *= h * h;
     // Area: every cell between the walls' faces (nodes i0 - 1 ..= i1 + 1).
     let mut area = 0.0;
     for j in j0 - 1..=j1 {
@@ -285,6 +242,7 @@ fn sample(sim: &Simulation, geo: &Geometry) -> anyhow::Result<Sample> {
         others,
         biggest_other,
         front,
+        energy,
     })
 }
 
@@ -301,6 +259,8 @@ struct Run {
     samples: Vec<(f64, Sample)>,
     /// Largest |V/V₀ - 1| of the level set's own volume ∫H_ε(φ_w) (held by construction).
     volume_drift: f64,
+    /// |g|.
+    gravity: f64,
 }
 
 impl Run {
@@ -340,8 +300,15 @@ fn run(ratio: f64, h: f64, geo: &Geometry) -> anyhow::Result<Run> {
         }
     })?;
     let end = scene.numerics.end_time;
+    let gravity = scene
+        .fluid
+        .gravity
+        .iter()
+        .map(|g| g * g)
+        .sum::<f64>()
+        .sqrt();
     let mut sim = Simulation::new(scene)?;
-    let mut samples = vec![(0.0, sample(&sim, geo)?)];
+    let mut samples = vec![(0.0, sample(&sim, geo, 1.0 / ratio)?)];
     let mut drift = 0.0f64;
     let mut error = None;
     for k in 1.. {
@@ -358,7 +325,7 @@ fn run(ratio: f64, h: f64, geo: &Geometry) -> anyhow::Result<Run> {
             error = Some(format!("{e:#}"));
             break;
         }
-        samples.push((sim.time(), sample(&sim, geo)?));
+        samples.push((sim.time(), sample(&sim, geo, 1.0 / ratio)?));
         if t == end {
             break;
         }
@@ -371,6 +338,7 @@ fn run(ratio: f64, h: f64, geo: &Geometry) -> anyhow::Result<Run> {
         error,
         samples,
         volume_drift: drift,
+        gravity,
     })
 }
 
@@ -434,6 +402,41 @@ fn run_rows(rep: &mut Report, r: &Run, geo: &Geometry) {
         None => Row::abs(format!("{one} ({detail})"), 0.0, worst as f64, 0.0),
         Some(_) => Row::yes_no(format!("{one} ({detail}{stopped})"), false),
     });
+    // Energy: the largest rise of the kinetic + potential energy over an earlier sample, in
+    // units of the potential energy the column releases as it spreads into a flat layer.
+    let width = geo.hi[0] - geo.lo[0];
+    let released = (1.0 - 1.0 / r.ratio)
+        * r.gravity
+        * (geo.area * geo.area / (2.0 * geo.width) - geo.area * geo.area / (2.0 * width));
+    let mut lowest = f64::INFINITY;
+    let (mut rise, mut rise_at) = (0.0f64, (0.0, 0.0));
+    for (t, s) in &r.samples {
+        if s.energy - lowest > rise {
+            rise = s.energy - lowest;
+            rise_at = (*t, s.energy);
+        }
+        lowest = lowest.min(s.energy);
+    }
+    let energy = format!(
+        "{label}: kinetic + potential energy never rises over an earlier sample by more than {ENERGY_RISE} of the potential energy the column releases ({released:.3})"
+    );
+    let detail = if rise > 0.0 {
+        format!(
+            "largest rise {rise:.3e} to {:.5} at t = {:.2}",
+            rise_at.1, rise_at.0
+        )
+    } else {
+        "it never rises".to_string()
+    };
+    rep.rows.push(match &r.error {
+        None => Row::abs(
+            format!("{energy} ({detail})"),
+            0.0,
+            rise / released,
+            ENERGY_RISE,
+        ),
+        Some(_) => Row::yes_no(format!("{energy} ({detail}{stopped})"), false),
+    });
     // A quantity at the given sample times, as a list ("-" where the run did not get).
     let at = |times: &[f64], f: fn(&Sample) -> f64| {
         times
@@ -454,7 +457,8 @@ fn run_rows(rep: &mut Report, r: &Run, geo: &Geometry) {
         .find(|(_, s)| s.fragments > 0)
         .map_or("none".to_string(), |(t, _)| format!("t = {t:.2}"));
     rep.notes.push(format!(
-        "{label}: liquid area at t = 0, 0.05, 0.5, 1, 1.5, 2, 2.3: {}; front (x - x_wall)/a at t = 0.1, 0.2, 0.3, 0.5, 0.75, 1, 1.5, 2, 2.3: {}; front at the far wall: {}; first fragment: {first}; most liquid regions besides the main one (any size) {others}; the level set's own volume drifts {:.1e} (restored every step); {}",
+        "{label}: kinetic + potential energy at t = 0, 0.5, 1, 1.5, 2, 2.3: {}; liquid area at t = 0, 0.05, 0.5, 1, 1.5, 2, 2.3: {}; front (x - x_wall)/a at t = 0.1, 0.2, 0.3, 0.5, 0.75, 1, 1.5, 2, 2.3: {}; front at the far wall: {}; first fragment: {first}; most liquid regions besides the main one (any size) {others}; the level set's own volume drifts {:.1e} (restored every step); {}",
+        at(&[0.0, 0.5, 1.0, 1.5, 2.0, 2.3], |s| s.energy),
         at(&[0.0, 0.05, 0.5, 1.0, 1.5, 2.0, 2.3], |s| s.area),
         at(&[0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 2.3], |s| s.front),
         r.far_wall(geo)

@@ -25,7 +25,7 @@ pub const CASE: Case = Case {
             row: "the cup ends on the floor",
             quick: true,
             full: true,
-            why: "since the grid-scale dissipation (issue 32) the 48^3 run reaches t = 0.6: the cup enters the water, its centre rises 0.109 after the impact, it turns (20.9 rad per unit time), the volume holds to 3e-14, but at t = 0.6 its centre is still 1.21 cup heights above the floor (it has not filled and sunk yet; at 64^3, 0.83 cup heights, sinking at 0.3, with the gas at the waterline stirred to an energy of about 20). Before, it blew up at t = 0.055 (48^3); issues 32 and 34",
+            why: "in momentum form (issue 44) the 48^3 run (1:100) reaches t = 0.6: the cup enters the water, its centre rises again after the impact, it turns, the volume holds to 3e-11, but at t = 0.6 its centre is still 0.79 cup heights above the floor (0.71 asked; 1.21 in vorticity form): it has not filled and sunk yet; the bodies in a free surface still move by the projection; issues 34 and 44",
         },
     ],
 };
