@@ -382,13 +382,13 @@ fn free_surface_ratio_beyond_the_tested_one_warns_with_its_line() {
 )"#
         )
     };
-    let ok = tumble::scene::Scene::parse(&text("0.01"), "pool.ron", "pool").unwrap();
+    let ok = tumble::scene::Scene::parse(&text("0.001"), "pool.ron", "pool").unwrap();
     assert!(ok.warnings().iter().all(|w| !w.contains("gas_density")));
-    let far = tumble::scene::Scene::parse(&text("0.001"), "pool.ron", "pool").unwrap();
+    let far = tumble::scene::Scene::parse(&text("0.0001"), "pool.ron", "pool").unwrap();
     let w = far.warnings();
     assert!(
         w.iter()
-            .any(|w| w.contains("pool.ron, line 6") && w.contains("1:1000")),
+            .any(|w| w.contains("pool.ron, line 6") && w.contains("1:10000")),
         "{w:?}"
     );
 }
