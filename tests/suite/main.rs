@@ -4,6 +4,7 @@
 //! Run one file's tests with `cargo test --release --test suite NAME::`.
 
 mod bodies;
+mod carry;
 mod check_summary;
 mod cli;
 mod common;
