@@ -102,7 +102,7 @@ pub struct PressureSolver {
     /// otherwise).
     potential: Vec<f64>,
     /// Per-row partial sums of the potential's interface mean (scratch).
-    poisson_partial: Vec<[f64; 2]>,
+    potential_partial: Vec<[f64; 2]>,
 }
 
 impl PressureSolver {
@@ -119,7 +119,7 @@ impl PressureSolver {
                 Vec::new()
             },
             potential: if momentum { vec![0.0; n] } else { Vec::new() },
-            poisson_partial: if momentum {
+            potential_partial: if momentum {
                 vec![[0.0; 2]; n / grid.n[0]]
             } else {
                 Vec::new()
@@ -261,7 +261,7 @@ fn reduced_potential(
     };
     // Per row: Σ w g·x and Σ w, summed in row order afterwards.
     let pot = &mut solver.potential;
-    let partial = &mut solver.poisson_partial;
+    let partial = &mut solver.potential_partial;
     pot.par_chunks_mut(nx)
         .zip(partial.par_iter_mut())
         .enumerate()
