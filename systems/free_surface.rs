@@ -74,7 +74,7 @@ use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::kernels::heaviside;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
 use crate::bodies::{Body, BodyFields, GridPatch};
-use crate::solvers::sweep::{LinePool, LineScratch, sweep};
+use crate::solvers::sweep::{LinePool, LineScratch, split_axes, sweep};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -398,12 +398,7 @@ pub fn free_surface(
     let scratch = &mut *scratch;
     // x y z on even steps, z y x on odd ones (second order over two steps).
     let reverse = time.step % 2 == 1;
-    let axes: &[usize] = match (grid.dim, reverse) {
-        (2, false) => &[0, 1],
-        (2, true) => &[1, 0],
-        (_, false) => &[0, 1, 2],
-        (_, true) => &[2, 1, 0],
-    };
+    let axes = split_axes(grid.dim, reverse);
     let u = &fields.u;
     // In momentum form the particles of the transport carried φ_w with the mass and momentum.
     let axes = if params.momentum_form() {

@@ -87,7 +87,7 @@ use crate::base::pool::Pool;
 use crate::bodies::BodyFields;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
 use crate::solvers::carry::{CarryPool, CarryScratch, NEAR_CELLS, Near, carry_sweep};
-use crate::solvers::sweep::{LinePool, LineScratch, sweep};
+use crate::solvers::sweep::{LinePool, LineScratch, split_axes, sweep};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -150,12 +150,7 @@ pub fn transport(
     if grid.dim == 3 && !scratch.reverse {
         stretch(&grid, dt, omega, u);
     }
-    let axes: &[usize] = match (grid.dim, scratch.reverse) {
-        (2, false) => &[0, 1],
-        (2, true) => &[1, 0],
-        (_, false) => &[0, 1, 2],
-        (_, true) => &[2, 1, 0],
-    };
+    let axes = split_axes(grid.dim, scratch.reverse);
     for &axis in axes {
         sweep(
             &grid,
@@ -264,12 +259,7 @@ pub fn momentum_transport(
         level_set: reach,
         solid: reach,
     };
-    let axes: &[usize] = match (dim, time.step % 2 == 1) {
-        (2, false) => &[0, 1],
-        (2, true) => &[1, 0],
-        (_, false) => &[0, 1, 2],
-        (_, true) => &[2, 1, 0],
-    };
+    let axes = split_axes(dim, time.step % 2 == 1);
     // The hat kernel leaves a node empty when a particle moves a cell or more: the push is cut
     // into substeps that move no particle more than SUBSTEP_CELLS cells.
     let umax = crate::solvers::max_norm(&fields.u);

@@ -54,6 +54,17 @@ impl LineScratch {
     }
 }
 
+/// The order of the axes of a dimensionally split step in `dim` dimensions: x y (z), or in
+/// reverse, z y x, alternated from step to step so the splitting is second order over two.
+pub fn split_axes(dim: usize, reverse: bool) -> &'static [usize] {
+    match (dim, reverse) {
+        (2, false) => &[0, 1],
+        (2, true) => &[1, 0],
+        (_, false) => &[0, 1, 2],
+        (_, true) => &[2, 1, 0],
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 /// One advection sweep along `axis`: push (RK2, kernel-interpolated velocity) and remesh
 /// every line of nodes.
