@@ -25,10 +25,11 @@ pub struct LiquidLevelSet {
     pub phi: Vec<f64>,
     /// Half-width of the band where φ_w is a signed distance, length; |φ_w| ≤ band.
     pub band: f64,
-    /// The liquid volume the surface keeps, ∫H_ε(φ_w) dV at t = 0 (length^d: an area in 2D).
+    /// The liquid volume the surface keeps, ∫(1 - χ)H_ε(φ_w) dV at t = 0 over the fluid outside
+    /// the walls and bodies (length^d: an area in 2D).
     pub target_volume: f64,
-    /// The liquid volume ∫H_ε(φ_w) dV after the last step, length^d.
+    /// The liquid volume ∫(1 - χ)H_ε(φ_w) dV after the last step, length^d.
     pub volume: f64,
-    /// The interface area ∫δ_ε(φ_w) dV after the last step, length^(d-1).
+    /// The interface area ∫(1 - χ)δ_ε(φ_w) dV after the last step, length^(d-1).
     pub area: f64,
 }
