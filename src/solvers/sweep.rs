@@ -321,18 +321,25 @@ fn gather(s: &mut LineScratch, g: &Group, u_axis: &[f64], ptrs: &[SyncPtr<f64>; 
             w[count..].fill(0.0);
         }
     }
+    fill_periodic_ghosts(&mut s.u, n, GHOST, LANES);
+}
+
+/// Fill the `ghost` periodic ghost nodes at both ends of a velocity line of `n` nodes stored
+/// from node `-ghost`, interleaved by `lanes` lanes: left ghost k is node k - ghost, right
+/// ghost k node n + k (both wrapped).
+#[inline(always)]
+pub(crate) fn fill_periodic_ghosts(u: &mut [f64], n: usize, ghost: usize, lanes: usize) {
     let ni = n as i64;
-    for g in 0..GHOST {
-        // Left ghost g is node g - GHOST, right ghost g is node n + g (both wrapped).
-        let left = (g as i64 - GHOST as i64).rem_euclid(ni) as usize;
-        let right = (ni + g as i64).rem_euclid(ni) as usize;
-        s.u.copy_within(
-            (GHOST + left) * LANES..(GHOST + left + 1) * LANES,
-            g * LANES,
+    for k in 0..ghost {
+        let left = (k as i64 - ghost as i64).rem_euclid(ni) as usize;
+        let right = (ni + k as i64).rem_euclid(ni) as usize;
+        u.copy_within(
+            (ghost + left) * lanes..(ghost + left + 1) * lanes,
+            k * lanes,
         );
-        s.u.copy_within(
-            (GHOST + right) * LANES..(GHOST + right + 1) * LANES,
-            (GHOST + n + g) * LANES,
+        u.copy_within(
+            (ghost + right) * lanes..(ghost + right + 1) * lanes,
+            (ghost + n + k) * lanes,
         );
     }
 }
