@@ -29,6 +29,7 @@ pub mod kappa;
 mod liquid;
 pub mod overlap;
 pub mod resolved;
+pub mod steps;
 pub mod valid;
 
 pub use crate::base::params::{BodyCoupling, InterfaceAcceleration, RemeshKernel, TimeStep};
