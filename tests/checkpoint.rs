@@ -1160,3 +1160,187 @@ fn plugin_state_restarts_and_is_refused_by_name_and_version() {
         .to_string();
     assert!(e.contains("no state `counter`"), "{e}");
 }
+
+// ---- Runs killed without warning (issue 46) ----
+
+/// Whether `name` is the temporary file of a checkpoint being written.
+fn is_checkpoint_temp(name: &str) -> bool {
+    name.starts_with(".checkpoint_") && checkpoint::is_temp_file(name)
+}
+
+/// The names of the files in `dir`.
+fn names(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .map(|r| {
+            r.map(|e| e.unwrap().file_name().into_string().unwrap())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The step of a checkpoint's temporary file (`.checkpoint_NNNNNN.bin.tmp-*`).
+fn temp_step(name: &str) -> Option<u64> {
+    let name = name.strip_prefix('.')?;
+    checkpoint::step_of(&name[..name.find(".tmp-")?])
+}
+
+/// Runs with wall-clock checkpoints after about every step (`--checkpoint-wall 0.001`) killed
+/// with SIGKILL at a seeded random step, either a random moment (up to 20 ms) after a
+/// checkpoint or as soon as a checkpoint's temporary file appears (in the middle of its
+/// write), then continued with `--restart DIR`: every checkpoint left on disk reads back
+/// whole, and the restarted run's outputs are those of the run never stopped, bit for bit.
+#[test]
+fn sigkill_at_random_moments_restarts_bit_for_bit() {
+    let d = tmp("sigkill");
+    let scene = scene_file(&d);
+    // 76 steps to t = 0.3.
+    let until = "0.3";
+    let straight = d.join("straight");
+    ok(&run(&[
+        "run",
+        s(&scene),
+        "--out",
+        s(&straight),
+        "--until",
+        until,
+        "--checkpoint-wall",
+        "0",
+        "--quiet",
+    ]));
+    assert!(
+        checkpoint::list(&straight).unwrap().is_empty(),
+        "--checkpoint-wall 0 wrote a checkpoint"
+    );
+    let mut rng = common::Rng(46);
+    let mut mid_write = 0;
+    for seed in 0..6 {
+        let out = d.join(format!("killed{seed}"));
+        let mut child = tumble()
+            .args([
+                "run",
+                s(&scene),
+                "--out",
+                s(&out),
+                "--until",
+                until,
+                "--checkpoint-wall",
+                "0.001",
+                "--quiet",
+            ])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let target = (35.0 + 30.0 * rng.next()) as u64; // 5 to 65
+        let pause = 0.01 * (rng.next() + 1.0); // 0 to 20 ms
+        let start = Instant::now();
+        loop {
+            let files = names(&out);
+            let done = if seed % 2 == 0 {
+                files
+                    .iter()
+                    .filter_map(|n| checkpoint::step_of(n))
+                    .any(|s| s >= target)
+            } else {
+                files
+                    .iter()
+                    .filter_map(|n| temp_step(n))
+                    .any(|s| s >= target)
+            };
+            if done {
+                break;
+            }
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "seed {seed}: the run ended before step {target}"
+            );
+            assert!(start.elapsed() < Duration::from_secs(60), "seed {seed}");
+            std::thread::sleep(Duration::from_micros(100));
+        }
+        if seed % 2 == 0 {
+            std::thread::sleep(Duration::from_secs_f64(pause));
+        }
+        child.kill().unwrap(); // SIGKILL
+        assert!(!child.wait().unwrap().success(), "seed {seed}: not killed");
+        if names(&out).iter().any(|n| is_checkpoint_temp(n)) {
+            mid_write += 1;
+        }
+        // Every checkpoint on disk is whole: the 2 kept, and a third when the kill falls
+        // between a new one's rename and the deletion of the oldest.
+        let left = checkpoint::list(&out).unwrap();
+        assert!(!left.is_empty() && left.len() <= 3, "seed {seed}: {left:?}");
+        for (_, p) in &left {
+            Checkpoint::load(p).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        }
+        // The restart goes on without checkpoints (a restart may change the interval).
+        ok(&run(&[
+            "run",
+            "--restart",
+            s(&out),
+            "--checkpoint-wall",
+            "0",
+            "--quiet",
+        ]));
+        for n in names(&out) {
+            assert!(
+                !checkpoint::is_temp_file(&n),
+                "seed {seed}: {n} left behind"
+            );
+        }
+        assert_same_outputs(&straight, &out);
+    }
+    assert!(
+        mid_write >= 1,
+        "no kill landed in the middle of a checkpoint's write"
+    );
+}
+
+/// A run whose outputs would not fit on the disk is refused before anything is written,
+/// with the numbers (exit status 2).
+#[test]
+fn a_run_too_large_for_the_disk_is_refused() {
+    let d = tmp("disk");
+    // 512² cells, a snapshot every 1e-6 to t = 1: a million snapshots of 4.2 MB (ω and u).
+    let f = d.join("huge.ron");
+    std::fs::write(
+        &f,
+        "Scene(\n    domain: (extent: [1.0, 1.0], cells: [512, 512]),\n    \
+         numerics: (dt: Fixed(0.001), end_time: 1.0),\n    output: (every: 1e-6),\n)",
+    )
+    .unwrap();
+    let out = d.join("run");
+    let o = run(&["run", s(&f), "--out", s(&out), "--quiet"]);
+    assert_eq!(o.status.code(), Some(2), "{o:?}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("would take about")
+            && err.contains("1000001 snapshots of 4.2 MB")
+            && err.contains("free on the disk of"),
+        "{err}"
+    );
+    assert!(!out.exists(), "the refused run made its directory");
+}
+
+/// Without a terminal, the progress lines (every tenth of the run, also in the log) give the
+/// time left.
+#[test]
+fn progress_lines_give_the_time_left() {
+    let d = tmp("eta");
+    let out = d.join("run");
+    let o = run(&[
+        "run",
+        s(&scene_file(&d)),
+        "--out",
+        s(&out),
+        "--until",
+        "0.1",
+    ]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("% ")).collect();
+    assert_eq!(lines.len(), 10, "{err}");
+    assert!(lines.iter().all(|l| l.contains(" left")), "{err}");
+    assert!(lines[9].contains("about 0 s left"), "{err}");
+    let log = std::fs::read_to_string(out.join("log.txt")).unwrap();
+    assert!(log.contains("progress: 50%, step "), "{log}");
+}

@@ -49,7 +49,13 @@ fn measure(
     plugins: &PluginList,
 ) -> anyhow::Result<String> {
     anyhow::ensure!(steps > 0, "--steps must be at least 1");
-    let scene = scene.edit(|s| s.numerics.end_time = f64::MAX / 4.0)?;
+    // An end time the timed steps never reach (no step is shortened to land on it), yet one
+    // the scene's largest step can count to (2^50 of them; see `scene::steps`).
+    let far = match crate::scene::steps::step_bound(&scene, &scene.grid(), scene.resolved()) {
+        Some(b) => b.dt * 2f64.powi(50),
+        None => f64::MAX / 4.0,
+    };
+    let scene = scene.edit(|s| s.numerics.end_time = far)?;
     let name = scene.name.clone();
     let mut sim = Simulation::builder(scene).add_plugins(plugins).build()?;
     sim.set_stop_at(None);

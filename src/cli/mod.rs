@@ -57,6 +57,11 @@ enum Command {
         /// scene's output.checkpoint_every.
         #[arg(long, value_name = "T")]
         checkpoint_every: Option<f64>,
+        /// Write a checkpoint every S seconds of wall-clock time (0: never), overriding the
+        /// scene's output.checkpoint_wall (default 900, every 15 minutes), so that a run killed
+        /// without warning loses at most about S seconds of work.
+        #[arg(long, value_name = "S")]
+        checkpoint_wall: Option<f64>,
         /// Continue a run from a checkpoint, appending to its run directory (the checkpoint's):
         /// a checkpoint file, or a run directory (then its latest complete checkpoint).
         #[arg(long, value_name = "DIR|CHECKPOINT", conflicts_with_all = ["out", "force"])]
@@ -145,6 +150,7 @@ pub fn status(
             force,
             quiet,
             checkpoint_every,
+            checkpoint_wall,
             restart,
         } => {
             let opts = crate::run::RunOptions {
@@ -153,6 +159,7 @@ pub fn status(
                 force,
                 quiet,
                 checkpoint_every,
+                checkpoint_wall,
                 plugins,
             };
             run::run(scene.as_deref(), restart.as_deref(), &opts)

@@ -2,7 +2,7 @@
 
 use crate::io::checkpoint::{Interrupted, install_interrupt_handler};
 use crate::run::{
-    BadOutputDir, RunOptions, RunSummary, is_refused_restart, restart_run, run_scene,
+    BadOutputDir, RefusedRun, RunOptions, RunSummary, is_refused_restart, restart_run, run_scene,
 };
 use std::path::Path;
 
@@ -35,8 +35,12 @@ pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> u
         Err(e) => {
             eprintln!("error: {e:#}");
             // A bad output directory is a usage mistake, like a bad scene; so is a checkpoint
-            // that cannot be restarted.
-            if e.is::<BadOutputDir>() || is_refused_restart(&e) {
+            // that cannot be restarted, and a run whose outputs would not fit on the disk.
+            if e.is::<BadOutputDir>()
+                || e.is::<RefusedRun>()
+                || e.is::<crate::scene::SceneError>()
+                || is_refused_restart(&e)
+            {
                 2
             } else {
                 1

@@ -233,8 +233,9 @@ pub fn resolve(path: &Path) -> Result<PathBuf, CheckpointError> {
         return Ok(legacy);
     }
     Err(err(if refused.is_empty() {
-        "the directory holds no checkpoint (checkpoint_NNNNNN.bin); was the run written with \
-         output.checkpoint_every or --checkpoint-every, or stopped with Ctrl-C?"
+        "the directory holds no checkpoint (checkpoint_NNNNNN.bin): the run wrote none (a run \
+         writes one every output.checkpoint_wall seconds of wall time, 15 minutes by default, \
+         every output.checkpoint_every of simulated time, and when stopped with Ctrl-C)"
             .to_string()
     } else {
         format!(
@@ -758,12 +759,13 @@ fn check_trailer(b: &[u8], start: usize) -> Result<&[u8], String> {
 }
 
 /// The scene text that decides whether two scenes are the same run: everything but the end
-/// time and the checkpoint interval (a restart may change them) and the output directory (a
+/// time and the checkpoint intervals (a restart may change them) and the output directory (a
 /// restart writes into the checkpoint's).
 fn run_identity(scene: &Scene) -> String {
     let mut s = scene.clone();
     s.numerics.end_time = 0.0;
     s.output.checkpoint_every = None;
+    s.output.checkpoint_wall = None;
     s.output.dir = None;
     s.to_ron()
 }

@@ -166,3 +166,163 @@ fn sig2(x: f64) -> String {
     let decimals = (1 - x.abs().log10().floor() as i32).max(0) as usize;
     format!("{x:.decimals$}")
 }
+
+/// Bytes of a `series.csv` row (up to 9 values written to full precision, about 24 characters
+/// each).
+pub const SERIES_ROW_BYTES: f64 = 220.0;
+
+/// Bytes of a `bodies.csv` row (one per moving body and step: 20 values to full precision, the
+/// id and the name).
+pub const BODY_ROW_BYTES: f64 = 500.0;
+
+/// Bytes of a checkpoint besides the fields (the scene's text, the run's progress, the
+/// systems' records), and per body.
+const CHECKPOINT_BASE_BYTES: f64 = 16.0e3;
+const CHECKPOINT_BODY_BYTES: f64 = 600.0;
+
+/// The steps and wall time of a whole run, as far as the scene tells (see
+/// [`crate::scene::steps`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunLength {
+    /// The largest step and what sets it; `None` when the scene does not bound the step (an
+    /// adaptive step without `dt_max`, bodies, gravity on bodies or a free surface).
+    pub bound: Option<crate::scene::steps::StepBound>,
+    /// Steps to the end time: exactly (a fixed step) or at least (an adaptive one).
+    pub steps: Option<f64>,
+    /// Estimated wall seconds on 2 threads: `steps` times the estimated time per step.
+    pub wall: Option<f64>,
+}
+
+/// The steps and wall time of `scene`'s run.
+pub fn run_length(scene: &ValidScene) -> RunLength {
+    let bound = crate::scene::steps::step_bound(scene, &scene.grid(), scene.resolved());
+    let steps = bound.map(|b| b.steps(scene.numerics.end_time));
+    RunLength {
+        bound,
+        steps,
+        wall: steps.map(|n| n * estimate(scene).seconds_per_step),
+    }
+}
+
+/// The files a run writes, and about how large.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Outputs {
+    /// Field snapshots (the first, one per `output.every`, the last).
+    pub snapshots: f64,
+    /// Bytes of one snapshot in every format, before compression.
+    pub snapshot_bytes: f64,
+    /// Bytes of one checkpoint.
+    pub checkpoint_bytes: f64,
+    /// The most checkpoints on disk at once: `output.checkpoints_kept` and the one being
+    /// written when checkpoints are periodic, else the one an interruption writes.
+    pub checkpoints: usize,
+    /// Bytes of the CSV time series over the steps of [`run_length`] (at least), `None` when
+    /// the steps are not known.
+    pub series_bytes: Option<f64>,
+}
+
+impl Outputs {
+    /// Everything: the snapshots, the checkpoints and the time series (when known).
+    pub fn total(&self) -> f64 {
+        self.snapshots * self.snapshot_bytes
+            + self.checkpoints as f64 * self.checkpoint_bytes
+            + self.series_bytes.unwrap_or(0.0)
+    }
+
+    /// The outputs in words: "about 1.2 GB: 41 snapshots of 25 MB, 3 checkpoints of 30 MB, time
+    /// series 2 MB".
+    pub fn words(&self) -> String {
+        let h = crate::io::summary::human_bytes;
+        let series = match self.series_bytes {
+            Some(b) => format!("time series at least {}", h(b)),
+            None => "time series (not counted: the steps are not known)".to_string(),
+        };
+        format!(
+            "{} snapshots of {} (before compression), {} checkpoint{} of {}, {series}",
+            if self.snapshots < 1e12 {
+                format!("{:.0}", self.snapshots)
+            } else {
+                format!("{:.3e}", self.snapshots)
+            },
+            h(self.snapshot_bytes),
+            self.checkpoints,
+            if self.checkpoints == 1 { "" } else { "s" },
+            h(self.checkpoint_bytes),
+        )
+    }
+}
+
+/// Field snapshots of `scene`: the first, one at each multiple of `output.every`, the last.
+pub fn snapshot_count(scene: &ValidScene) -> f64 {
+    match scene.output.every {
+        Some(e) if e > 0.0 => (scene.numerics.end_time / e).ceil() + 1.0,
+        _ => 2.0,
+    }
+}
+
+/// Values (per node, summed over the snapshot's fields) of one snapshot of `scene`.
+pub fn snapshot_values(scene: &ValidScene) -> f64 {
+    use crate::scene::FieldName;
+    let g = scene.grid();
+    let per_node: usize = scene
+        .output
+        .fields
+        .iter()
+        .map(|f| match f {
+            FieldName::Omega => g.omega_components(),
+            FieldName::Velocity => 3,
+            FieldName::Density if scene.bodies.is_empty() => 0,
+            FieldName::Density => 3,
+        })
+        .sum();
+    per_node as f64 * g.len() as f64
+}
+
+/// The outputs of `scene`'s run.
+pub fn outputs(scene: &ValidScene) -> Outputs {
+    let g = scene.grid();
+    let o = &scene.output;
+    let n = g.len() as f64;
+    let snapshot_bytes =
+        snapshot_values(scene) * o.precision.bytes() as f64 * o.formats.len() as f64;
+    // ω, u (f64) and the previous u (f32), per node.
+    let per_node = 8.0 * g.omega_components() as f64 + 12.0 * g.dim as f64;
+    let checkpoint_bytes =
+        CHECKPOINT_BASE_BYTES + per_node * n + CHECKPOINT_BODY_BYTES * scene.bodies.len() as f64;
+    let periodic = o.checkpoint_every.is_some() || o.checkpoint_wall.is_some();
+    let checkpoints = if periodic {
+        o.checkpoints_kept.max(1) + 1
+    } else {
+        1
+    };
+    let moving = scene
+        .bodies
+        .iter()
+        .filter(|b| !matches!(b.kind, crate::scene::BodyKind::Static))
+        .count() as f64;
+    let series_bytes = run_length(scene)
+        .steps
+        .map(|s| (s + 1.0) * (SERIES_ROW_BYTES + moving * BODY_ROW_BYTES));
+    Outputs {
+        snapshots: snapshot_count(scene),
+        snapshot_bytes,
+        checkpoint_bytes,
+        checkpoints,
+        series_bytes,
+    }
+}
+
+/// Seconds as a person reads them: "40 s", "12 min", "3.5 h", "2.1 days".
+pub fn human_seconds(s: f64) -> String {
+    if !s.is_finite() {
+        format!("{s}")
+    } else if s < 100.0 {
+        format!("{} s", sig2(s))
+    } else if s < 6000.0 {
+        format!("{} min", sig2(s / 60.0))
+    } else if s < 3.0 * 86400.0 {
+        format!("{} h", sig2(s / 3600.0))
+    } else {
+        format!("{} days", sig2(s / 86400.0))
+    }
+}

@@ -2,6 +2,7 @@
 //! the plots.
 
 pub mod checkpoint;
+pub mod disk;
 pub mod estimate;
 #[cfg(feature = "hdf5")]
 pub mod hdf5_out;

@@ -6,14 +6,16 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::base::params::TimeStep;
-use crate::scene::{BodyKind, FieldName, OutputFormat, Precision, ValidScene};
+use crate::scene::{BodyKind, OutputFormat, Precision, ValidScene};
 
 /// The most distinct densities listed one by one; beyond, their range is given.
 const MAX_LISTED_DENSITIES: usize = 8;
 
 /// A byte count as a person reads it.
 pub fn human_bytes(b: f64) -> String {
-    if b >= 1e9 {
+    if b >= 1e12 {
+        format!("{:.1} TB", b / 1e12)
+    } else if b >= 1e9 {
         format!("{:.1} GB", b / 1e9)
     } else if b >= 1e6 {
         format!("{:.1} MB", b / 1e6)
@@ -186,11 +188,13 @@ pub fn describe(scene: &ValidScene) -> String {
     medium_line(&mut s, scene);
     free_surface_line(&mut s, scene);
     time_step_line(&mut s, scene);
+    run_length_line(&mut s, scene);
     dissipation_line(&mut s, scene);
     initial_vorticity_line(&mut s, scene);
     bodies_lines(&mut s, scene);
     output_lines(&mut s, scene);
     checkpoints_line(&mut s, scene);
+    disk_line(&mut s, scene);
     plugins_line(&mut s, scene);
     warnings_lines(&mut s, scene);
     s
@@ -294,8 +298,59 @@ fn time_step_line(s: &mut String, scene: &ValidScene) {
                 .iter()
                 .any(|b| matches!(b.kind, crate::scene::BodyKind::Dynamic)),
         ),
-        scene.numerics.end_time
+        number(scene.numerics.end_time)
     );
+}
+
+/// A number as written in a scene, in scientific notation when very large or small (an end
+/// time of 1e300 is not printed with its 301 digits).
+pub fn number(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// The steps and wall time of the whole run, from the largest step the scene can take.
+fn run_length_line(s: &mut String, scene: &ValidScene) {
+    use crate::io::estimate::{human_seconds, run_length};
+    let r = run_length(scene);
+    match (r.bound, r.steps, r.wall) {
+        (Some(b), Some(n), Some(w)) => {
+            let (exactly, at_least) = if b.exact {
+                ("", "about ")
+            } else {
+                ("at least ", "at least ")
+            };
+            let _ = writeln!(
+                s,
+                "  run: {exactly}{} steps (dt at most {}: {}), {at_least}{} of wall time on 2 \
+                 threads (estimated)",
+                grouped_f(n),
+                sig4(b.dt),
+                b.why,
+                human_seconds(w)
+            );
+        }
+        _ => {
+            let _ = writeln!(
+                s,
+                "  run: the number of steps is not known before the run (an adaptive step that \
+                 only the flow bounds; numerics.dt's dt_max bounds it); each step about {}",
+                human_seconds(crate::io::estimate::estimate(scene).seconds_per_step)
+            );
+        }
+    }
+}
+
+/// A count, with thousands separators below 10^12, else in scientific notation.
+fn grouped_f(n: f64) -> String {
+    if n < 1e12 {
+        grouped(n as usize)
+    } else {
+        format!("{n:.3e}")
+    }
 }
 
 /// The grid-scale dissipation of a 3D flow.
@@ -456,26 +511,9 @@ fn contact_line(s: &mut String, scene: &ValidScene) {
 /// The field snapshots (how many, of what, in which formats, about how large) and the body
 /// surfaces.
 fn output_lines(s: &mut String, scene: &ValidScene) {
-    let g = scene.grid();
     let o = &scene.output;
-    let comps = |fname: &FieldName| -> usize {
-        match fname {
-            FieldName::Omega => g.omega_components(),
-            FieldName::Velocity => 3,
-            FieldName::Density => {
-                if scene.bodies.is_empty() {
-                    0
-                } else {
-                    3
-                }
-            }
-        }
-    };
-    let values: usize = o.fields.iter().map(comps).sum::<usize>() * g.len();
-    let snapshots = match o.every {
-        Some(e) if e > 0.0 => (scene.numerics.end_time / e).ceil() as usize + 1,
-        _ => 2,
-    };
+    let values = crate::io::estimate::snapshot_values(scene);
+    let snapshots = crate::io::estimate::snapshot_count(scene);
     let fields: Vec<String> = o.fields.iter().map(|f| format!("{f:?}")).collect();
     let formats: Vec<&str> = o
         .formats
@@ -496,12 +534,14 @@ fn output_lines(s: &mut String, scene: &ValidScene) {
             s,
             "  output: {} snapshots ({}) of {} in {}, {precision} precision, at most {} each \
              before compression",
-            snapshots,
-            o.every
-                .map_or("first and last".to_string(), |e| format!("every {e}")),
+            grouped_f(snapshots),
+            o.every.map_or("first and last".to_string(), |e| format!(
+                "every {}",
+                number(e)
+            )),
             fields.join(", "),
             formats.join(" and "),
-            human_bytes(bytes * values as f64)
+            human_bytes(bytes * values)
         );
     }
     if !scene.bodies.is_empty() {
@@ -511,22 +551,61 @@ fn output_lines(s: &mut String, scene: &ValidScene) {
 
 /// When checkpoints are written and how many are kept.
 fn checkpoints_line(s: &mut String, scene: &ValidScene) {
+    use crate::io::estimate::human_seconds;
     let o = &scene.output;
-    match o.checkpoint_every {
-        Some(c) => {
-            let _ = writeln!(
-                s,
-                "  checkpoints every {c}, the last {} kept",
-                o.checkpoints_kept
-            );
-        }
-        None => {
-            let _ = writeln!(
-                s,
-                "  checkpoints: only if interrupted (Ctrl-C); --checkpoint-every T for more"
-            );
-        }
+    let mut when = Vec::new();
+    if let Some(w) = o.checkpoint_wall {
+        when.push(format!(
+            "every {} of wall time (output.checkpoint_wall: {} s)",
+            human_seconds(w),
+            number(w)
+        ));
     }
+    if let Some(c) = o.checkpoint_every {
+        when.push(format!("every {} of simulated time", number(c)));
+    }
+    if when.is_empty() {
+        let _ = writeln!(
+            s,
+            "  checkpoints: only if interrupted (Ctrl-C, SIGTERM): output.checkpoint_wall is \
+             off, a killed run loses everything; --checkpoint-wall S or --checkpoint-every T \
+             for more"
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "  checkpoints: {}, and if interrupted (Ctrl-C, SIGTERM); the last {} kept; tumble \
+             run --restart DIR continues from the newest",
+            when.join(" and "),
+            o.checkpoints_kept
+        );
+    }
+}
+
+/// The disk the outputs take, and what is free where the run would write.
+fn disk_line(s: &mut String, scene: &ValidScene) {
+    let out = crate::io::estimate::outputs(scene);
+    // The run directory without --out: the scene's output.dir, else runs/<name>.
+    let dir = match &scene.output.dir {
+        Some(d) => std::path::PathBuf::from(d),
+        None => std::path::Path::new("runs").join(&scene.name),
+    };
+    let free =
+        crate::io::disk::free_bytes(&dir).map(|f| (f, crate::io::disk::existing_ancestor(&dir)));
+    let free = match free {
+        Some((f, at)) => format!(
+            "; {} free on the disk of {}",
+            human_bytes(f as f64),
+            at.display()
+        ),
+        None => String::new(),
+    };
+    let _ = writeln!(
+        s,
+        "  disk: about {} ({}){free}",
+        human_bytes(out.total()),
+        out.words()
+    );
 }
 
 /// The scene's warnings, one a line, or none.

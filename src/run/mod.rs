@@ -38,6 +38,9 @@ pub struct RunOptions {
     pub quiet: bool,
     /// Simulated time between checkpoints, overriding the scene's `output.checkpoint_every`.
     pub checkpoint_every: Option<f64>,
+    /// Wall-clock seconds between checkpoints, overriding the scene's
+    /// `output.checkpoint_wall`; 0 turns them off.
+    pub checkpoint_wall: Option<f64>,
     /// Plugins beyond the built-in ones (a user's physics; see `tumble::cli::main_with`).
     pub plugins: PluginList,
 }
@@ -74,7 +77,77 @@ impl std::fmt::Display for BadOutputDir {
 
 impl std::error::Error for BadOutputDir {}
 
-/// Apply the command line's end time and checkpoint interval to `scene`.
+/// A run refused before it starts, with the numbers why (its outputs would not fit on the
+/// disk): `tumble run` exits with status 2.
+#[derive(Debug)]
+pub struct RefusedRun(pub String);
+
+impl std::fmt::Display for RefusedRun {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for RefusedRun {}
+
+/// Refuse a run of `scene` into `dir` whose outputs would not fit on the disk (see
+/// [`crate::io::estimate::outputs`]): the snapshots before compression, the checkpoints on
+/// disk at once and the time series over the fewest steps the run can take, against the
+/// space free on the disk of `dir` (plus, with `--force`, what the run directory it replaces
+/// holds). Nothing is checked where the free space is not known.
+fn check_disk(scene: &ValidScene, dir: &Path, force: bool) -> anyhow::Result<()> {
+    let Some(free) = crate::io::disk::free_bytes(dir) else {
+        return Ok(());
+    };
+    let replaced = if force && outdir::is_run_dir(dir) {
+        dir_bytes(dir)
+    } else {
+        0
+    };
+    let out = crate::io::estimate::outputs(scene);
+    let need = out.total();
+    let have = free.saturating_add(replaced) as f64;
+    if need <= have {
+        return Ok(());
+    }
+    let h = crate::io::summary::human_bytes;
+    Err(RefusedRun(format!(
+        "the outputs of this run would take about {} ({}), more than the {} free on the disk \
+         of {}{}; write fewer snapshots (output.every), fewer fields (output.fields) or single \
+         precision (output.precision), keep fewer checkpoints (output.checkpoints_kept), or \
+         choose another --out",
+        h(need),
+        out.words(),
+        h(free as f64),
+        crate::io::disk::existing_ancestor(dir).display(),
+        if replaced > 0 {
+            format!(
+                " (with the {} of the run directory --force replaces)",
+                h(replaced as f64)
+            )
+        } else {
+            String::new()
+        }
+    ))
+    .into())
+}
+
+/// Bytes of the files under `dir` (symbolic links not followed).
+fn dir_bytes(dir: &Path) -> u64 {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    entries
+        .flatten()
+        .map(|e| match e.file_type() {
+            Ok(t) if t.is_dir() => dir_bytes(&e.path()),
+            Ok(t) if t.is_file() => e.metadata().map_or(0, |m| m.len()),
+            _ => 0,
+        })
+        .sum()
+}
+
+/// Apply the command line's end time and checkpoint intervals to `scene`.
 fn apply_overrides(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<ValidScene> {
     if let Some(t) = opts.until {
         anyhow::ensure!(
@@ -88,7 +161,13 @@ fn apply_overrides(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<Valid
             "--checkpoint-every must be a positive time, got {c}"
         );
     }
-    if opts.until.is_none() && opts.checkpoint_every.is_none() {
+    if let Some(w) = opts.checkpoint_wall {
+        anyhow::ensure!(
+            w.is_finite() && w >= 0.0,
+            "--checkpoint-wall must be a number of seconds, 0 for none, got {w}"
+        );
+    }
+    if opts.until.is_none() && opts.checkpoint_every.is_none() && opts.checkpoint_wall.is_none() {
         return Ok(scene);
     }
     Ok(scene.edit(|scene| {
@@ -97,6 +176,9 @@ fn apply_overrides(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<Valid
         }
         if let Some(c) = opts.checkpoint_every {
             scene.output.checkpoint_every = Some(c);
+        }
+        if let Some(w) = opts.checkpoint_wall {
+            scene.output.checkpoint_wall = (w > 0.0).then_some(w);
         }
     })?)
 }
@@ -122,11 +204,15 @@ struct Run {
     next_ckpt: Option<f64>,
     /// (t, step, file) of the latest checkpoint, if this run wrote or started from one.
     last_ckpt: Option<(f64, u64, PathBuf)>,
+    /// When this process started the run or last wrote a checkpoint (for
+    /// `output.checkpoint_wall`).
+    since_ckpt: Instant,
 }
 
 /// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
 pub fn run_scene(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
     let scene = apply_overrides(scene, opts)?;
+    check_disk(&scene, &outdir::resolve(&scene, opts)?, opts.force)?;
     let dir = prepare_dir(&scene, opts)?;
     let _log = RunLog::create(&dir.join("log.txt"))?;
     start_run(scene, opts, dir).inspect_err(log_error)
@@ -184,6 +270,7 @@ fn start_run(scene: ValidScene, opts: &RunOptions, dir: PathBuf) -> anyhow::Resu
         next_out: every.map(|e| e.min(end)),
         next_ckpt,
         last_ckpt: None,
+        since_ckpt: wall0,
     };
     drive(run, opts, wall0)
 }
@@ -343,6 +430,7 @@ fn continue_run(
         next_out: p.next_out,
         next_ckpt,
         last_ckpt: Some((ck.time.t, ck.time.step, ck.file.clone())),
+        since_ckpt: Instant::now(),
     };
     drive(run, opts, wall0)
 }
@@ -396,6 +484,7 @@ impl Run {
             .with_context(|| format!("cannot write {}", path.display()))?;
         tracing::info!("checkpoint at step {step}, t = {t}: {}", path.display());
         self.last_ckpt = Some((t, step, path));
+        self.since_ckpt = Instant::now();
         // Only once the new one is complete are the oldest beyond output.checkpoints_kept
         // deleted.
         let kept = self.sim.scene().output.checkpoints_kept.max(1);
@@ -407,17 +496,27 @@ impl Run {
         Ok(())
     }
 
-    /// After a step whose outputs are written: checkpoint if one is due or a stop was asked
-    /// for, and stop if so.
+    /// After a step whose outputs are written: checkpoint if one is due (by simulated time,
+    /// `output.checkpoint_every`, or by wall-clock time, `output.checkpoint_wall`) or a stop
+    /// was asked for, and stop if so.
     fn after_step(&mut self, end: f64) -> anyhow::Result<()> {
         let t = self.sim.time();
-        let due = self.next_ckpt.is_some_and(|c| t >= c * (1.0 - 1e-12));
+        let wall_due = self
+            .sim
+            .scene()
+            .output
+            .checkpoint_wall
+            .is_some_and(|w| self.since_ckpt.elapsed().as_secs_f64() >= w);
+        let sim_due = self.next_ckpt.is_some_and(|c| t >= c * (1.0 - 1e-12));
         let stop = checkpoint::interrupt_requested() && t < end * (1.0 - 1e-12);
-        if due || stop {
+        if wall_due || sim_due || stop {
             self.checkpoint()?;
-            if let Some(every) = self.sim.scene().output.checkpoint_every {
-                self.next_ckpt = Some(next_multiple(t, every));
-            }
+        }
+        // The checkpoints in simulated time keep their own schedule.
+        if (sim_due || stop)
+            && let Some(every) = self.sim.scene().output.checkpoint_every
+        {
+            self.next_ckpt = Some(next_multiple(t, every));
         }
         if stop {
             return Err(Interrupted {
@@ -535,9 +634,10 @@ impl Run {
     }
 
     /// A final checkpoint, from which the run can be continued (`--restart --until`), when
-    /// checkpoints are periodic and the last one is not of this step.
+    /// checkpoints are periodic in simulated time or the run wrote or started from one (by
+    /// wall-clock time, an interruption), and the last one is not of this step.
     fn final_checkpoint(&mut self) -> anyhow::Result<()> {
-        if self.sim.scene().output.checkpoint_every.is_some()
+        if (self.sim.scene().output.checkpoint_every.is_some() || self.last_ckpt.is_some())
             && self
                 .last_ckpt
                 .as_ref()
@@ -595,52 +695,85 @@ fn add_timings(totals: &mut Vec<(&'static str, f64)>, last: &[(&'static str, f64
     }
 }
 
+/// Steps in the window the time left is estimated over.
+const ETA_WINDOW: usize = 50;
+
 /// The progress a run shows: a bar on a terminal, else a line at every tenth of the run
-/// (neither with `--quiet`).
+/// (neither with `--quiet`); the line also goes to the log. Both give the time left, from the
+/// wall time the last [`ETA_WINDOW`] steps took per simulated time.
 struct Progress {
     bar: ProgressBar,
     /// The last tenth of the run reached, 0 to 10.
     last_tenth: u32,
     quiet: bool,
     wall0: Instant,
+    /// (wall clock, simulated time) after each of the last steps, oldest first.
+    window: std::collections::VecDeque<(Instant, f64)>,
 }
 
 impl Progress {
     /// The progress of a run starting from the state of `sim`.
     fn new(sim: &Simulation, quiet: bool, wall0: Instant) -> Self {
         let end = sim.scene().numerics.end_time;
+        let mut window = std::collections::VecDeque::with_capacity(ETA_WINDOW + 1);
+        window.push_back((Instant::now(), sim.time()));
         Progress {
             bar: progress_bar(quiet),
             last_tenth: ((sim.time() / end).clamp(0.0, 1.0) * 10.0).floor() as u32,
             quiet,
             wall0,
+            window,
         }
+    }
+
+    /// Wall seconds left to `end` from simulated time `t`, at the pace of the steps in the
+    /// window; `None` before a step has advanced the clock.
+    fn seconds_left(&self, t: f64, end: f64) -> Option<f64> {
+        let (&(w0, t0), &(w1, t1)) = (self.window.front()?, self.window.back()?);
+        let dt = t1 - t0;
+        (dt > 0.0).then(|| (w1 - w0).as_secs_f64() / dt * (end - t).max(0.0))
     }
 
     /// Show the state after a step: the bar's position and message, or a line when a new
     /// tenth of the run is reached.
     fn show(&mut self, sim: &Simulation, end: f64) {
+        self.window.push_back((Instant::now(), sim.time()));
+        if self.window.len() > ETA_WINDOW + 1 {
+            self.window.pop_front();
+        }
         let frac = (sim.time() / end).clamp(0.0, 1.0);
         let s = sim.sample();
+        let left = self
+            .seconds_left(sim.time(), end)
+            .map_or("?".to_string(), crate::io::estimate::human_seconds);
         self.bar.set_position((frac * 1000.0) as u64);
         self.bar.set_message(format!(
-            "step {} t = {:.4} dt = {:.2e} max|ω| = {:.3e}",
+            "step {} t = {:.4} dt = {:.2e} max|ω| = {:.3e}, about {left} left",
             sim.steps(),
             s.t,
             s.dt,
             s.max_omega
         ));
         let tenth = (frac * 10.0).floor() as u32;
-        if self.bar.is_hidden() && !self.quiet && tenth > self.last_tenth {
+        if tenth > self.last_tenth {
             self.last_tenth = tenth;
-            eprintln!(
-                "  {:>3}%  step {}  t = {:.4}  max|ω| = {:.3e}  {:.1} s",
+            let elapsed = self.wall0.elapsed().as_secs_f64();
+            tracing::info!(
+                "progress: {}%, step {}, t = {:.6}, {:.1} s elapsed, about {left} left",
                 tenth * 10,
                 sim.steps(),
                 s.t,
-                s.max_omega,
-                self.wall0.elapsed().as_secs_f64()
+                elapsed
             );
+            if self.bar.is_hidden() && !self.quiet {
+                eprintln!(
+                    "  {:>3}%  step {}  t = {:.4}  max|ω| = {:.3e}  {elapsed:.1} s, about {left} left",
+                    tenth * 10,
+                    sim.steps(),
+                    s.t,
+                    s.max_omega,
+                );
+            }
         }
     }
 }
@@ -689,7 +822,7 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     }
     let bar = ProgressBar::new(1000);
     bar.set_style(
-        ProgressStyle::with_template("{bar:30.cyan/blue} {percent:>3}% {msg} [eta {eta}]")
+        ProgressStyle::with_template("{bar:30.cyan/blue} {percent:>3}% {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar

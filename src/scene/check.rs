@@ -103,6 +103,7 @@ fn check_bodies_and_rest(
             .map_err(|i| i.under(Seg::Key("free_surface")))?;
     }
     check_vacuum(scene).map_err(|i| i.under(Seg::Key("vacuum")))?;
+    check_unique_names(&scene.bodies)?;
     scene
         .contact
         .check(&scene.bodies)
@@ -116,7 +117,59 @@ fn check_bodies_and_rest(
         .map_err(|i| i.under(Seg::Key("free_surface")))?;
     let resolved = super::resolved::resolve(scene, grid, &geoms);
     check_kappa_scale(scene, &resolved).map_err(|i| i.under(Seg::Key("contact")))?;
+    check_step_count(scene, grid, &resolved).map_err(|i| i.under(Seg::Key("numerics")))?;
     Ok((grid.clone(), geoms, resolved))
+}
+
+/// Bodies are named in `bodies.csv`, `bodies.pvd`, the plots and `contact.pairs`: every name
+/// once. A repeated name is reported at the later body's `name`.
+fn check_unique_names(bodies: &[BodySpec]) -> Check {
+    let mut seen: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for (i, b) in bodies.iter().enumerate() {
+        if let Some(&j) = seen.get(b.name.as_str()) {
+            return Err(Issue::new(
+                &["name"],
+                format!(
+                    "`{}` is already the name of bodies[{j}]: bodies.csv, bodies.pvd, the plots \
+                     and contact.pairs name bodies by name, so every body needs its own",
+                    b.name
+                ),
+            )
+            .under(Seg::Index(i))
+            .under(Seg::Key("bodies")));
+        }
+        seen.insert(&b.name, i);
+    }
+    Ok(())
+}
+
+/// An end time the clock cannot count to: more than [`super::steps::MAX_STEPS`] steps even at
+/// the largest step the scene can take.
+fn check_step_count(scene: &Scene, grid: &Grid, resolved: &Resolved) -> Check {
+    let Some(b) = super::steps::step_bound(scene, grid, resolved) else {
+        return Ok(());
+    };
+    let end = scene.numerics.end_time;
+    let steps = b.steps(end);
+    if steps.is_finite() && steps <= super::steps::MAX_STEPS {
+        return Ok(());
+    }
+    let count = if b.exact {
+        format!("{steps:.3e}")
+    } else {
+        format!("at least {steps:.3e}")
+    };
+    fail(
+        &["end_time"],
+        format!(
+            "end_time = {end:e} takes {count} steps of at most dt = {:e} ({}), more than the \
+             2^53 = {:.3e} a run can count (a step that small no longer moves a clock near the \
+             end time); shorten the end time or lengthen the step",
+            b.dt,
+            b.why,
+            super::steps::MAX_STEPS
+        ),
+    )
 }
 
 /// A scene's name names its run directory `runs/<name>`: one plain path component.
@@ -682,6 +735,17 @@ impl Output {
         {
             return fail(&["checkpoint_every"], format!("must be positive, got {e}"));
         }
+        if let Some(w) = self.checkpoint_wall
+            && !(w.is_finite() && w > 0.0)
+        {
+            return fail(
+                &["checkpoint_wall"],
+                format!(
+                    "must be a positive number of seconds, got {w} (`checkpoint_wall: None` \
+                     turns the wall-clock checkpoints off)"
+                ),
+            );
+        }
         if self.checkpoints_kept == 0 {
             return fail(
                 &["checkpoints_kept"],
@@ -719,6 +783,7 @@ fn check_geometry(scene: &Scene, grid: &Grid) -> Check<Vec<ShapeGeometry>> {
         })?;
         geoms.push(g);
     }
+    check_periodic_images(scene, grid, &geoms)?;
     if let Some(o) = super::overlap::initial_overlap(scene, grid, &geoms) {
         let (a, b) = (&scene.bodies[o.a], &scene.bodies[o.b]);
         let dim = grid.dim;
@@ -743,6 +808,67 @@ fn check_geometry(scene: &Scene, grid: &Grid) -> Check<Vec<ShapeGeometry>> {
         .under(Seg::Key("bodies")));
     }
     Ok(geoms)
+}
+
+/// The gap a moving body must leave to its own periodic image along each axis, in cells:
+/// its smoothed edge (`numerics.interface_cells` on either side) plus one cell on either side.
+fn image_gap(scene: &Scene, h: f64) -> f64 {
+    2.0 * (scene.numerics.interface_cells + 1.0) * h
+}
+
+/// The box is periodic along every axis: a dynamic or kinematic body longer than the box along
+/// an axis overlaps its own periodic image, and one that leaves less than [`image_gap`] between
+/// itself and its image touches it through its smoothed edge. Measured on the body's world
+/// bounding box at the start (rotated as given). Static bodies are walls: a floor may span the
+/// box and continue into its image.
+fn check_periodic_images(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> Check {
+    let ext = grid.extent();
+    let gap = image_gap(scene, grid.h);
+    for (i, (b, g)) in scene.bodies.iter().zip(geoms).enumerate() {
+        if matches!(b.kind, BodyKind::Static) {
+            continue;
+        }
+        let Some((lo, hi)) = g.bounds() else {
+            continue;
+        };
+        let m = glam::DMat3::from_quat(crate::bodies::rotation(&b.rotation));
+        let half = 0.5 * (hi - lo);
+        for a in 0..grid.dim {
+            let size = 2.0 * m.row(a).abs().dot(half);
+            let axis = ["x", "y", "z"][a];
+            let (l, rotated) = (
+                ext[a],
+                if b.rotation.is_empty() {
+                    ""
+                } else {
+                    ", as rotated"
+                },
+            );
+            let message = if size >= l {
+                format!(
+                    "body `{}` is {size:.4} long along {axis}{rotated}, not shorter than the \
+                     periodic box ({l}): it overlaps its own periodic image; make it smaller or \
+                     the box larger",
+                    b.name
+                )
+            } else if l - size < gap {
+                format!(
+                    "body `{}` overlaps its own periodic image along {axis}: it is {size:.4} \
+                     long{rotated} in a periodic box of {l}, leaving {:.4} to its image, less \
+                     than the {gap:.4} (2 (interface_cells + 1) h) its smoothed edges need; \
+                     make it smaller or the box larger",
+                    b.name,
+                    l - size
+                )
+            } else {
+                continue;
+            };
+            return Err(Issue::new(&["shape"], message)
+                .under(Seg::Index(i))
+                .under(Seg::Key("bodies")));
+        }
+    }
+    Ok(())
 }
 
 impl Scene {

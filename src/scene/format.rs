@@ -337,6 +337,9 @@ pub enum FieldName {
     Density,
 }
 
+/// The default `output.checkpoint_wall`, seconds: a checkpoint every 15 minutes of wall time.
+pub const DEFAULT_CHECKPOINT_WALL: f64 = 900.0;
+
 /// What is written and how often.
 #[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -359,8 +362,16 @@ pub struct Output {
     /// named by step, the latest `checkpoints_kept` kept; `tumble run --restart DIR`
     /// continues from the latest), time units; `tumble run
     /// --checkpoint-every` overrides it. `None` writes a checkpoint only when the run is
-    /// interrupted (Ctrl-C, SIGTERM). Default: None.
+    /// interrupted (Ctrl-C, SIGTERM), and those of `checkpoint_wall`. Default: None.
     pub checkpoint_every: Option<f64>,
+    /// Wall-clock seconds between checkpoints: one is written after the first step that ends
+    /// this long after the run's start (or restart) or its last checkpoint, so a run killed
+    /// without warning (SIGKILL, the out-of-memory killer, a batch system's time limit, a
+    /// reboot) loses at most about this much work; `tumble run --restart DIR` continues from
+    /// the newest. A run that wrote one also writes one at its end. Kept as `checkpoints_kept`
+    /// says, next to those of `checkpoint_every`; `tumble run --checkpoint-wall S` overrides
+    /// it. `None` (or `--checkpoint-wall 0`) turns it off. Default: 900 (15 minutes).
+    pub checkpoint_wall: Option<f64>,
     /// How many checkpoints are kept in the run directory (`checkpoint_NNNNNN.bin`, named by
     /// step; older ones that tumble wrote are deleted once a newer one is complete), ≥ 1.
     /// Default: 2.
@@ -435,6 +446,7 @@ impl Default for Output {
             dir: None,
             formats: vec![OutputFormat::Vtk],
             checkpoint_every: None,
+            checkpoint_wall: Some(DEFAULT_CHECKPOINT_WALL),
             checkpoints_kept: 2,
             precision: Precision::Single,
             units: None,

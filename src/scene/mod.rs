@@ -18,7 +18,8 @@
 //! The files: [`format`] (the serde structs, every field documented), [`check`] (one check per
 //! type), [`error`] (errors and their locations), [`kappa`] (the default contact strength from
 //! the scene's scales), [`generate`] (body generators, expanded into bodies), [`overlap`] (bodies overlapping at the start), [`resolved`] (the
-//! defaults worked out from other settings, once) and [`valid`] (the [`ValidScene`] that only
+//! defaults worked out from other settings, once), [`steps`] (the largest step a scene allows
+//! and the fewest steps to its end) and [`valid`] (the [`ValidScene`] that only
 //! those checks make, the only scene the engine takes).
 
 pub mod check;
@@ -29,6 +30,7 @@ pub mod kappa;
 mod liquid;
 pub mod overlap;
 pub mod resolved;
+pub mod steps;
 pub mod valid;
 
 pub use crate::base::params::{BodyCoupling, InterfaceAcceleration, RemeshKernel, TimeStep};

@@ -628,7 +628,7 @@ fn full_disk_names_the_file_and_fails() {
     let mnt = d.join("mnt");
     std::fs::create_dir_all(&mnt).unwrap();
     let mounted = Command::new("mount")
-        .args(["-t", "tmpfs", "-o", "size=64k", "tmpfs"])
+        .args(["-t", "tmpfs", "-o", "size=1m", "tmpfs"])
         .arg(&mnt)
         .output();
     match &mounted {
@@ -645,32 +645,70 @@ fn full_disk_names_the_file_and_fails() {
             return;
         }
     }
-    // 64x64 nodes: the snapshots (ω, u: 3 compressed floats per node, about 40 kB each once
-    // the flow has developed) fill the disk within the first few.
-    let scene = d.join("big.ron");
-    std::fs::write(&scene, SCENE.replace("[32, 32]", "[64, 64]")).unwrap();
+    // 256x256 nodes: the snapshots (ω, u: 3 floats per node, 786 kB each before
+    // compression) would not fit on the 1 MB disk: the run is refused before anything is
+    // written, with the numbers.
+    let huge = d.join("huge.ron");
+    std::fs::write(&huge, SCENE.replace("[32, 32]", "[256, 256]")).unwrap();
     let out = mnt.join("run");
-    let st = tumble()
-        .args(["run", scene.to_str().unwrap(), "--quiet", "--out"])
+    let refused = tumble()
+        .args(["run", huge.to_str().unwrap(), "--quiet", "--out"])
         .arg(&out)
         .output()
         .unwrap();
+    // 64x64 nodes fit (about 340 kB); once the run has checked the disk and made its
+    // directory, the disk fills up (another program's file): the run stops at the write that
+    // fails, naming its file.
+    let scene = d.join("big.ron");
+    std::fs::write(&scene, SCENE.replace("[32, 32]", "[64, 64]")).unwrap();
+    let child = tumble()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--force",
+            "--out",
+        ])
+        .arg(mnt.join("run2"))
+        .args(["--checkpoint-wall", "0"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let filler = mnt.join("filler");
+    let start = std::time::Instant::now();
+    while !mnt.join("run2").exists() && start.elapsed().as_secs() < 30 {
+        std::thread::sleep(std::time::Duration::from_micros(100));
+    }
+    {
+        use std::io::Write;
+        let mut f = std::fs::File::create(&filler).unwrap();
+        while f.write_all(&[0u8; 512]).is_ok() {}
+    }
+    let st = child.wait_with_output().unwrap();
     let _ = Command::new("umount").arg(&mnt).status();
-    assert!(!st.status.success());
-    assert_ne!(st.status.code(), Some(0));
-    let msg = String::from_utf8_lossy(&st.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{refused:?}");
+    let msg = String::from_utf8_lossy(&refused.stderr);
     one_paragraph(&msg);
-    assert!(msg.contains("the disk is full writing"), "{msg}");
-    // It names the snapshot it was writing.
+    assert!(
+        msg.contains("would take about") && msg.contains("free on the disk of"),
+        "{msg}"
+    );
+    assert!(!out.exists(), "the refused run made its directory");
+    assert!(!st.status.success());
+    // (The log's own failed writes are reported by the logger on stderr too.)
+    let all = String::from_utf8_lossy(&st.stderr);
+    let msg = all
+        .lines()
+        .find(|l| l.starts_with("error: "))
+        .unwrap_or_else(|| panic!("{all}"));
+    assert!(msg.contains("the disk is full writing"), "{all}");
+    // It names the file it was writing, in the run directory.
     let named = msg
         .split("writing ")
         .nth(1)
         .and_then(|r| r.split_whitespace().next())
         .unwrap_or("");
-    assert!(
-        named.contains("/run/fields_0000") && named.ends_with(".vti"),
-        "{msg}"
-    );
+    assert!(named.contains("/run2/"), "{msg}");
     let _ = std::fs::remove_dir_all(&d);
 }
 
