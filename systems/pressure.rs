@@ -131,6 +131,13 @@ impl PressureSolver {
     pub fn iterations(&self) -> usize {
         self.poisson.iterations
     }
+
+    /// In momentum form, the reduced gravity's potential g·x - c of the last solve per node
+    /// (0 inside the walls; empty otherwise): the pressure there is p = φ/Δt + ρ_P (g·x - c),
+    /// φ = `PressureState::phi` and Δt that solve's step.
+    pub fn reduced_potential(&self) -> &[f64] {
+        &self.potential
+    }
 }
 
 /// The gravity force density on the face between nodes `lo` and `hi = lo + e_a`,

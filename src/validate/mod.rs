@@ -132,6 +132,7 @@ pub const CASES: &[Case] = &[
     cases::column_collapse::CASE,
     cases::cup::CASE,
     cases::pool_drop::CASE,
+    cases::kleefsman::CASE,
 ];
 
 /// A case by name.
@@ -180,6 +181,7 @@ pub const SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/column-collapse.ron"),
     ),
     ("pool-drop.ron", include_str!("../../scenes/pool-drop.ron")),
+    ("kleefsman.ron", include_str!("../../scenes/kleefsman.ron")),
     ("tank-200.ron", include_str!("../../scenes/tank-200.ron")),
     (
         "tank-200-vacuum.ron",

@@ -10,6 +10,7 @@ pub mod dt_independence;
 pub mod ellipsoid_sphere;
 pub mod floating;
 pub mod high_re_sphere;
+pub mod kleefsman;
 pub mod lamb_oseen;
 pub mod poisson;
 pub mod pool_drop;
