@@ -251,8 +251,8 @@ pub fn momentum_transport(
     }
     // The velocity is frozen at ũ^n, made by this step's projection (gravity and pressure)
     // before it moves the particles: with the level set carried by them, the interface and the
-    // flow advance as a symplectic Euler pair (see the module doc).
-    mid_step_velocity(&mut fields.u, &mut fields.u_prev, 0.0);
+    // flow advance as a symplectic Euler pair (see the module doc). (`u_prev`, which only the
+    // vorticity form's extrapolation and the baroclinic coupling read, is not kept.)
     let reach = (NEAR_CELLS + params.numerics.interface_cells) * grid.h;
     let near = Near {
         field: dim + 1,
