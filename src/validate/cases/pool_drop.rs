@@ -524,7 +524,7 @@ fn drop_at(rep: &mut Report, cells: usize) -> anyhow::Result<()> {
             })
     };
     rep.notes.push(format!(
-        "{label}: liquid volume on the grid {}, {}, {}, {} (the pool {pool:.6}; the spheres' volume {volume:.3e} each); the level set's own volume, which counts phi_w continued inside the spheres, drifts {drift:.1e} (restored every step); {} steps",
+        "{label}: liquid volume on the grid {}, {}, {}, {} (the pool {pool:.6}; the spheres' volume {volume:.3e} each); the level set's volume outside the walls and spheres drifts {drift:.1e} (restored every step); {} steps",
         at(0.0),
         at(2.0),
         at(5.0),
