@@ -134,10 +134,18 @@ impl FreeSurfaceScratch {
     }
 
     /// The weight of the kept liquid volume, 1 - χ_s - Σχ_i (at least 0), with the moving
-    /// bodies' χ_i from their patches at their current pose (empty without any body).
-    fn fill_outside<'a>(&mut self, grid: &Grid, moving: impl Iterator<Item = &'a GridPatch>) {
+    /// bodies' χ_i from their patches at their current pose (empty without any body); the
+    /// static ones among `bodies` are already in the walls' part.
+    fn fill_outside<'a>(
+        &mut self,
+        grid: &Grid,
+        bodies: impl Iterator<Item = (&'a Body, &'a GridPatch)>,
+    ) {
         self.outside.clear();
-        let mut moving = moving.filter(|p| !p.is_empty()).peekable();
+        let mut moving = bodies
+            .filter(|(b, p)| !b.is_static() && !p.is_empty())
+            .map(|(_, p)| p)
+            .peekable();
         if self.open.is_empty() && moving.peek().is_none() {
             return;
         }
@@ -466,13 +474,7 @@ pub fn free_surface(
     }
     let eps = params.numerics.interface_cells * grid.h;
     redistance(&grid, ls, scratch, STEP_ITERATIONS, Some(eps));
-    scratch.fill_outside(
-        &grid,
-        bodies
-            .iter()
-            .filter(|(b, _)| !b.is_static())
-            .map(|(_, p)| p),
-    );
+    scratch.fill_outside(&grid, bodies.iter());
     restore_volume(&grid, ls, scratch, eps);
 }
 
@@ -684,13 +686,7 @@ pub fn free_surface_init(
         }
     }
     scratch.set_walls(&grid, phi_s.as_deref(), eps);
-    scratch.fill_outside(
-        &grid,
-        bodies
-            .iter()
-            .filter(|(b, _)| !b.is_static())
-            .map(|(_, p)| p),
-    );
+    scratch.fill_outside(&grid, bodies.iter());
     extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
     // A restart holds a redistanced level set and its target: leave both.
     if ls.target_volume == 0.0 {
