@@ -42,7 +42,8 @@ pub fn level_sets(
                 ));
             }
         }
-        let outside = sample(&grid, state, shape, &mut patch, eps);
+        let offset = wall_offset(&params, body, grid.h);
+        let outside = sample(&grid, state, shape, &mut patch, eps, offset);
         if let Some(axis) = outside
             && failure.reason.is_none()
         {
@@ -67,12 +68,26 @@ pub fn level_sets(
 pub fn level_sets_init(
     grid: Res<Grid>,
     params: Res<Params>,
-    mut bodies: Query<(&RigidState, &BodyShape, &mut GridPatch)>,
+    mut bodies: Query<(&Body, &RigidState, &BodyShape, &mut GridPatch)>,
 ) {
     let eps = params.numerics.interface_cells * grid.h;
-    for (state, shape, mut patch) in &mut bodies {
-        sample(&grid, state, shape, &mut patch, eps);
+    for (body, state, shape, mut patch) in &mut bodies {
+        let offset = wall_offset(&params, body, grid.h);
+        sample(&grid, state, shape, &mut patch, eps, offset);
         patch.sampled = false;
+    }
+}
+
+/// How far into a body (length) its mask χ = H_ε(φ - δ) is moved: δ =
+/// `numerics.penalization_offset` h for a static or kinematic body, whose rigid region then
+/// ends at its surface for every system that reads χ (the penalization, the free surface's
+/// projection and gravity, the kernels' choice); 0 for a dynamic body, whose χ is also its
+/// density and mass (`systems/penalization.rs`).
+pub fn wall_offset(params: &Params, body: &Body, h: f64) -> f64 {
+    if body.is_dynamic() {
+        0.0
+    } else {
+        params.numerics.penalization_offset * h
     }
 }
 
@@ -165,6 +180,7 @@ pub fn sample(
     shape: &BodyShape,
     patch: &mut GridPatch,
     eps: f64,
+    offset: f64,
 ) -> Option<usize> {
     let (lo, dims, clipped) = patch_box(grid, state, shape, patch_reach(grid, eps));
     patch.lo = lo;
@@ -188,7 +204,7 @@ pub fn sample(
                 let x = DVec3::new(p[0], p[1], p[2]);
                 let v = ls.phi(inv * (x - c));
                 phi[a] = v;
-                chi[a] = heaviside(v, eps);
+                chi[a] = heaviside(v - offset, eps);
             }
         });
     patch.sampled = true;

@@ -16,10 +16,10 @@
 //! its moment about the centroid. The Δt there is the previous step's, the one over which the
 //! flow built up the slip that the penalization removes.
 //!
-//! For static and kinematic bodies the penalization mask is H_ε(φ_i - δ) with
-//! δ = `penalization_offset` h (default 0; one half-width is the useful value): the smoothed
-//! band then lies inside the body, so the rigid region ends at the surface instead of reaching
-//! ε into the fluid. With
+//! For static and kinematic bodies the penalization mask is their χ = H_ε(φ_i - δ) with
+//! δ = `penalization_offset` h (default 0; `level_sets::wall_offset`), the same χ every other
+//! system reads: with δ = ε the smoothed band lies inside the body, so the rigid region ends at
+//! the surface instead of reaching ε into the fluid. With
 //! δ = 0, a fixed cylinder at Re = 20 (12.8 cells per diameter) has C_d = 2.34, falling to 2.20
 //! at 25.6 cells, first order; with δ = ε it is 2.098 and 2.090 (Dennis & Chang: 2.05
 //! unbounded; this box has 5% blockage). Dynamic bodies keep δ = 0: with the mask moved
@@ -67,7 +67,6 @@ pub fn penalization(
     } else {
         dt
     };
-    let mask = params.penalization_mask(grid.h);
     let momentum = params.numerics.body_coupling == BodyCoupling::Momentum;
     let pressure = params.numerics.body_coupling == BodyCoupling::Pressure;
     let fields = &mut *fields;
@@ -106,13 +105,9 @@ pub fn penalization(
                     let mut m = DVec3::ZERO;
                     for a in 0..dx {
                         let (cv, phi) = (patch.chi[r * dx + a], patch.phi[r * dx + a]);
-                        let chi = if newton {
-                            rigid_region(phi)
-                        } else if dynamic {
-                            cv
-                        } else {
-                            mask.apply(cv, phi)
-                        };
+                        // A static or kinematic body's χ is already its mask, moved into it by
+                        // `numerics.penalization_offset` (`level_sets::wall_offset`).
+                        let chi = if newton { rigid_region(phi) } else { cv };
                         if chi == 0.0 {
                             continue;
                         }

@@ -113,37 +113,7 @@ pub struct Params {
     pub multigrid: bool,
 }
 
-/// The penalization mask of a body from its χ and φ at a node: χ itself when the offset is
-/// zero, else the smoothed Heaviside H_ε(φ - offset) moved into the body.
-#[derive(Debug, Clone, Copy)]
-pub struct PenalizationMask {
-    /// Offset into the body (length).
-    pub offset: f64,
-    /// Half-width of the smoothed Heaviside (length).
-    pub eps: f64,
-}
-
-impl PenalizationMask {
-    /// The mask value at a node with characteristic function `chi` and level set `phi`.
-    #[inline]
-    pub fn apply(&self, chi: f64, phi: f64) -> f64 {
-        if self.offset == 0.0 {
-            chi
-        } else {
-            crate::base::kernels::heaviside(phi - self.offset, self.eps)
-        }
-    }
-}
-
 impl Params {
-    /// The penalization mask on a grid of spacing `h`.
-    pub fn penalization_mask(&self, h: f64) -> PenalizationMask {
-        PenalizationMask {
-            offset: self.numerics.penalization_offset * h,
-            eps: self.numerics.interface_cells * h,
-        }
-    }
-
     /// Whether the flow is carried in momentum form: each particle carries mass and momentum
     /// (and the liquid's level set) remeshed with the same weights, the velocity is their
     /// quotient and the variable-density projection makes it divergence-free

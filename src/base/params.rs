@@ -168,12 +168,15 @@ pub struct Numerics {
     pub lambda: f64,
     /// Half-width of the smoothed Heaviside χ = H(φ), in cells (> 0). Default: 1.
     pub interface_cells: f64,
-    /// Where the penalization mask of static and kinematic bodies (walls, obstacles) sits
-    /// relative to their surface, in cells: the mask is H_ε(φ - offset h), so with an offset
-    /// of one half-width the smoothed band lies inside the body and the rigid region does not
-    /// reach into the fluid (a fixed cylinder's drag then converges from the first grid).
-    /// Dynamic bodies always use the centred χ = H_ε(φ). In [0, 2 interface_cells].
-    /// Default: 0.
+    /// Where the mask of static and kinematic bodies (walls, obstacles) sits relative to
+    /// their surface, in cells: their χ is H_ε(φ - offset h) for every system that reads it
+    /// (the penalization; with a free surface also the projection's walls, the reduced
+    /// gravity and the remeshing kernels' choice), so with an offset of one half-width the
+    /// smoothed band lies inside the body and the rigid region does not reach into the fluid
+    /// (a fixed cylinder's drag then converges from the first grid). The liquid's volume is
+    /// kept with the centred weight whatever the offset. Dynamic bodies always use the
+    /// centred χ = H_ε(φ). In [0, 2 interface_cells]. Default: 0 (measured against 1 in
+    /// docs/numerics.md, "The walls' offset").
     pub penalization_offset: f64,
     /// How gravity and a dynamic body's own inertia reach the body. `Pressure` (the
     /// default, and the model for every density): the variable-density projection of
