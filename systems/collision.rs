@@ -37,7 +37,14 @@
 //! Broad phase: each bounded body's box (its grid patch) grown by the contact range; boxes
 //! are swept along x (sort and sweep) and only overlapping pairs are evaluated, so the cost
 //! follows the number of close pairs, not the number of bodies squared. An unbounded body (a
-//! wall, a tank) is tested against a body i by its signed distance at i's centre. Pairs are
+//! wall, a tank) is tested against a body i by its signed distance at i's centre.
+//!
+//! The box is periodic: two moving bodies near each other across its boundary touch through
+//! their periodic images. A body whose grown box reaches past the box's boundary is also
+//! tested against every other bounded body's nearest image (the pair then carries the whole
+//! box lengths `shift` by which the source body is moved to that image, in the narrow phase
+//! and in the pair's lever arms); bodies wholly inside the box, and every pair the sweep
+//! finds directly, are treated as before. Pairs are
 //! evaluated in parallel and added in a fixed order, so results do not depend on the thread
 //! count.
 
@@ -176,7 +183,7 @@ pub struct Contacts {
     pub records: Vec<ContactRecord>,
     boxes: Vec<BodyBox>,
     order: Vec<usize>,
-    pairs: Vec<(usize, usize, f64)>,
+    pairs: Vec<Pair>,
     results: Vec<PairResult>,
 }
 
@@ -190,6 +197,22 @@ impl Contacts {
             pairs: Vec::with_capacity(8 * n),
             results: Vec::with_capacity(8 * n),
         }
+    }
+}
+
+/// A directed pair for the narrow phase: receiver, source, κ, and the shift (whole box lengths)
+/// that moves the source to its periodic image nearest the receiver (zero for most pairs).
+type Pair = (usize, usize, f64, DVec3);
+
+/// A body's state moved by `shift` (its periodic image).
+fn image(s: &RigidState, shift: DVec3) -> RigidState {
+    if shift == DVec3::ZERO {
+        return *s;
+    }
+    RigidState {
+        center: s.center + shift,
+        centroid: s.centroid + shift,
+        ..*s
     }
 }
 
@@ -250,9 +273,10 @@ fn body_boxes(
         let kappa = states.get(entity).map_or(Some(0.0), |s| s.kappa);
         let (aabb, radius) = match shape.level_set.bounds() {
             Some((lo, hi)) => {
-                let (plo, phi) = (grid.pos(patch.lo[0], patch.lo[1], patch.lo[2]), {
-                    let top = [0, 1, 2].map(|a| patch.lo[a] + patch.dims[a].max(1) - 1);
-                    grid.pos(top[0], top[1], top[2])
+                // Unwrapped: next to the body, possibly past the box's boundary.
+                let (plo, phi) = (patch.pos(grid, 0, 0, 0), {
+                    let top = patch.dims.map(|d| d.max(1) - 1);
+                    patch.pos(grid, top[0], top[1], top[2])
                 });
                 let mut mins = PVec::new(plo[0], plo[1], plo[2]);
                 let mut maxs = PVec::new(phi[0], phi[1], phi[2]);
@@ -292,12 +316,12 @@ fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodi
         let (ax, ay) = (boxes[x].aabb.unwrap(), boxes[y].aabb.unwrap());
         ax.mins.x.total_cmp(&ay.mins.x).then(x.cmp(&y))
     });
-    let push = |pairs: &mut Vec<(usize, usize, f64)>, r: usize, s: usize| {
+    let push = |pairs: &mut Vec<Pair>, r: usize, s: usize, shift: DVec3| {
         let (br, bs) = (&boxes[r], &boxes[s]);
         if br.dynamic {
             let k = cp.kappa(br.id, bs.id, br.kappa, bs.kappa);
             if k > 0.0 {
-                pairs.push((r, s, k));
+                pairs.push((r, s, k, shift));
             }
         }
     };
@@ -313,8 +337,40 @@ fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodi
             if ax.intersects(&ay)
                 && (boxes[x].center - boxes[y].center).length_squared() <= reach * reach
             {
-                push(&mut c.pairs, x, y);
-                push(&mut c.pairs, y, x);
+                push(&mut c.pairs, x, y, DVec3::ZERO);
+                push(&mut c.pairs, y, x, DVec3::ZERO);
+            }
+        }
+    }
+    // Across the periodic boundary: a box reaching past it against the other bodies' nearest
+    // images (each unordered pair once; a pair the sweep found directly is not repeated).
+    let ext = grid.extent();
+    let (o, dim) = (grid.origin, grid.dim);
+    let past = |b: &Aabb| (0..dim).any(|a| b.mins[a] < o[a] || b.maxs[a] >= o[a] + ext[a]);
+    for &x in &c.order {
+        let ax = boxes[x].aabb.unwrap();
+        if !past(&ax) {
+            continue;
+        }
+        for &y in &c.order {
+            if y == x || (past(&boxes[y].aabb.unwrap()) && y < x) {
+                continue;
+            }
+            let mut shift = DVec3::ZERO;
+            let d = boxes[y].center - boxes[x].center;
+            for a in 0..dim {
+                shift[a] = -(d[a] / ext[a]).round() * ext[a];
+            }
+            if shift == DVec3::ZERO {
+                continue;
+            }
+            let ay = boxes[y].aabb.unwrap();
+            let sh = PVec::new(shift.x, shift.y, shift.z);
+            let ay = Aabb::new(ay.mins + sh, ay.maxs + sh);
+            let reach = boxes[x].radius + boxes[y].radius + cut;
+            if ax.intersects(&ay) && (d + shift).length_squared() <= reach * reach {
+                push(&mut c.pairs, x, y, shift);
+                push(&mut c.pairs, y, x, -shift);
             }
         }
     }
@@ -332,12 +388,12 @@ fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodi
             }
             let phi_c = shj.level_set.phi(inv * (bi.center - sj.center));
             if bi.aabb.is_none() || phi_c > -(bi.radius + cut + grid.h) {
-                push(&mut c.pairs, i, j);
+                push(&mut c.pairs, i, j, DVec3::ZERO);
             }
         }
     }
     // A fixed order: by unordered pair, then receiver.
-    c.pairs.sort_unstable_by_key(|&(r, s, _)| {
+    c.pairs.sort_unstable_by_key(|&(r, s, _, _)| {
         let (a, b) = (boxes[r].id, boxes[s].id);
         (a.min(b), a.max(b), a)
     });
@@ -357,11 +413,14 @@ fn pair_forces(
     let boxes = &c.boxes;
     c.pairs
         .par_iter()
-        .map(|&(r, s, kappa)| {
+        .map(|&(r, s, kappa, shift)| {
             let (Ok(ri), Ok(sj)) = (bodies.get(boxes[r].entity), bodies.get(boxes[s].entity))
             else {
                 return PairResult::default();
             };
+            // The source's periodic image nearest the receiver.
+            let sj_state = image(sj.2, shift);
+            let sj = (sj.0, sj.1, &sj_state, sj.3, sj.4, sj.5, sj.6);
             if !cp.predict {
                 return directed(
                     grid,
@@ -419,7 +478,7 @@ fn one_potential_per_dynamic_pair(c: &mut Contacts, bodies: &BodyQuery) {
     // invariance, -∇_i U_ji is the reaction of F_ji and -∂U_ji/∂θ_i its moment about x_i),
     // which conserves momentum, angular momentum and energy exactly.
     for k in 0..c.pairs.len().saturating_sub(1) {
-        let ((r, s, _), (r2, s2, _)) = (c.pairs[k], c.pairs[k + 1]);
+        let ((r, s, _, shift), (r2, s2, _, _)) = (c.pairs[k], c.pairs[k + 1]);
         if r2 != s || s2 != r || !boxes[s].dynamic {
             continue;
         }
@@ -438,7 +497,7 @@ fn one_potential_per_dynamic_pair(c: &mut Contacts, bodies: &BodyQuery) {
         let (Ok(bi), Ok(bj)) = (bodies.get(boxes[r].entity), bodies.get(boxes[s].entity)) else {
             continue;
         };
-        let arm = bj.2.centroid - bi.2.centroid;
+        let arm = bj.2.centroid + shift - bi.2.centroid;
         let (a, b) = (&c.results[k], &c.results[k + 1]);
         let (fi, fj) = (0.5 * (a.force - b.force), 0.5 * (b.force - a.force));
         let ti = 0.5 * (a.torque - b.torque - arm.cross(b.force));
@@ -460,7 +519,7 @@ fn one_potential_per_dynamic_pair(c: &mut Contacts, bodies: &BodyQuery) {
 fn accumulate(c: &mut Contacts, states: &mut Query<&mut ContactState>) {
     let boxes = &c.boxes;
     c.records.clear();
-    for (&(r, s, _), res) in c.pairs.iter().zip(&c.results) {
+    for (&(r, s, _, _), res) in c.pairs.iter().zip(&c.results) {
         if !res.any {
             continue;
         }

@@ -49,10 +49,12 @@ pub fn density(
         let phase = &out.rho_phase;
         (0..rows).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
+            let nodes = patch.row(&grid, b, c);
             for a in 0..dx {
-                let g = patch.grid_index(&grid, a, b, c);
+                let g = nodes.index(a);
                 let l = r * dx + a;
-                // SAFETY: distinct patch rows map to distinct grid nodes.
+                // SAFETY: distinct patch nodes map to distinct grid nodes (a patch is at
+                // most `n` nodes long along each axis, see `GridPatch`).
                 unsafe {
                     // ρ_i - ρ_P at this node; static bodies count as the fluid around them.
                     let d = if moving { density - phase[g] } else { 0.0 };

@@ -381,7 +381,15 @@ fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
     let nearest = bodies
         .iter()
         .map(|(b, shape, _, st)| {
-            let local = st.orientation.inverse() * (x - st.center);
+            // A moving body is seen through its periodic image nearest the node.
+            let mut d = x - st.center;
+            if !b.is_static() {
+                let ext = grid.extent();
+                for a in 0..grid.dim {
+                    d[a] -= (d[a] / ext[a]).round() * ext[a];
+                }
+            }
+            let local = st.orientation.inverse() * d;
             (b, shape.level_set.phi(local))
         })
         .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));

@@ -333,20 +333,21 @@ fn extension_values(grid: &Grid, patch: &GridPatch, phi: &[f64], next: &mut [f64
             let g = patch.grid_index(grid, a, b, c);
             let Some(n) = outward_normal(grid, patch, [a, b, c], p) else {
                 // No direction out of the body here: the node's own value.
-                // SAFETY: distinct patch rows map to distinct grid nodes.
+                // SAFETY: distinct patch nodes map to distinct grid nodes.
                 unsafe { out.write(g, phi[g]) };
                 continue;
             };
             let s = (p + h) / h;
+            // The node's index unwrapped (`interpolate` wraps it into the periodic box).
             let i = [
-                (patch.lo[0] + a) as f64,
-                (patch.lo[1] + b) as f64,
-                (patch.lo[2] + c) as f64,
+                (patch.lo[0] + a as isize) as f64,
+                (patch.lo[1] + b as isize) as f64,
+                (patch.lo[2] + c as isize) as f64,
             ];
             let xs = [i[0] + s * n[0], i[1] + s * n[1], i[2] + s * n[2]];
             let x1 = [xs[0] + n[0], xs[1] + n[1], xs[2] + n[2]];
             let (f0, f1) = (interpolate(grid, phi, xs), interpolate(grid, phi, x1));
-            // SAFETY: distinct patch rows map to distinct grid nodes.
+            // SAFETY: distinct patch nodes map to distinct grid nodes.
             unsafe { out.write(g, (f0 - s * (f1 - f0)).clamp(-band, band)) };
         }
     });
@@ -369,7 +370,7 @@ fn write_inside(
         for a in 0..dx {
             if patch.phi[r * dx + a] > 0.0 {
                 let n = patch.grid_index(grid, a, b, c);
-                // SAFETY: distinct patch rows map to distinct grid nodes.
+                // SAFETY: distinct patch nodes map to distinct grid nodes.
                 unsafe { out.write(n, value(n)) };
             }
         }

@@ -6,6 +6,15 @@
 //! and read by trilinear interpolation, so φ_i stays a signed distance for all time and errors
 //! do not accumulate. Only the nodes of the box the body (plus a band) can reach are sampled;
 //! χ_i = H_ε(φ_i) is the smoothed Heaviside of half-width ε = `interface_cells` h.
+//!
+//! The box is periodic, for the moving bodies as for the flow: a dynamic or kinematic body's
+//! box of nodes is not clipped at the grid's ends but continues past them, its nodes mapping
+//! to the grid modulo n (`GridPatch`), so a body straddling the boundary is sampled whole,
+//! each node at its image next to the body (φ is evaluated at the unwrapped position, and every
+//! consumer takes lever arms from it). `rigid_update` keeps the centre inside the box. A
+//! static body (a wall) keeps the clipped box it always had (walls that fill the box's edge
+//! would otherwise put their band on the far side); one whose solid reaches past the box's
+//! last nodes stops the run.
 
 use crate::base::fields::{Failure, Params, SimTime};
 use crate::base::grid::Grid;
@@ -27,30 +36,27 @@ pub fn level_sets(
         if body.is_static() && patch.sampled {
             continue;
         }
-        if shape.level_set.bounds().is_some() {
-            let ext = grid.extent();
-            let outside = (0..grid.dim).any(|a| {
-                state.center[a] < grid.origin[a] || state.center[a] > grid.origin[a] + ext[a]
-            });
-            if outside && failure.reason.is_none() {
-                failure.reason = Some(format!(
-                    "body `{}` left the domain at step {} (t = {:.6}): centre {:?}; add walls (a static body) or enlarge the domain",
-                    body.name,
-                    time.step,
-                    time.t,
-                    &state.center.to_array()[..grid.dim]
-                ));
-            }
+        // A moving body's centre is kept in the box by `rigid_update` (wrapped by a box
+        // length when it leaves it); only a non-finite one is left outside.
+        if !state.center.is_finite() && failure.reason.is_none() {
+            failure.reason = Some(format!(
+                "body `{}` left the domain at step {} (t = {:.6}): centre {:?}",
+                body.name,
+                time.step,
+                time.t,
+                &state.center.to_array()[..grid.dim]
+            ));
         }
         let offset = wall_offset(&params, body, grid.h);
-        let outside = sample(&grid, state, shape, &mut patch, eps, offset);
+        let outside = sample(&grid, body, state, shape, &mut patch, eps, offset);
         if let Some(axis) = outside
             && failure.reason.is_none()
         {
             failure.reason = Some(format!(
-                "body `{}` reaches outside the periodic box along {} at step {} (t = {:.6}): \
-                 centre {:?}; its level set would be clipped at the box's last nodes, not \
-                 wrapped around; move it inside, enlarge the domain or add walls",
+                "static body `{}` reaches outside the periodic box along {} at step {} \
+                 (t = {:.6}): centre {:?}; a static body's level set is clipped at the box's \
+                 last nodes, not wrapped around (moving bodies are); move it inside or \
+                 enlarge the domain",
                 body.name,
                 ["x", "y", "z"][axis],
                 time.step,
@@ -73,7 +79,7 @@ pub fn level_sets_init(
     let eps = params.numerics.interface_cells * grid.h;
     for (body, state, shape, mut patch) in &mut bodies {
         let offset = wall_offset(&params, body, grid.h);
-        sample(&grid, state, shape, &mut patch, eps, offset);
+        sample(&grid, body, state, shape, &mut patch, eps, offset);
         patch.sampled = false;
     }
 }
@@ -132,16 +138,21 @@ fn world_box(
 pub type Clipped = [[bool; 2]; 3];
 
 /// The box of grid nodes a body can affect in its current pose: its shape's bounds grown by
-/// `reach` (length), clipped to the grid's nodes (a patch is not wrapped around the periodic
-/// box), and which sides were clipped.
+/// `reach` (length), and which sides were clipped. With `wrap` (a moving body) the box is not
+/// clipped: its first node may lie outside the grid, its nodes map to the grid modulo `n`
+/// (the box is periodic), and a box longer than `n` nodes along an axis is cut to `n`, the
+/// extra nodes taken evenly off both ends (the scene checks keep a moving body shorter than
+/// the box by its smoothed edges, so only band nodes go). Without it (a static body: walls
+/// keep the clipped band they always had) the box is clipped to the grid's nodes.
 pub fn patch_box(
     grid: &Grid,
     state: &RigidState,
     shape: &BodyShape,
     reach: f64,
-) -> ([usize; 3], [usize; 3], Clipped) {
+    wrap: bool,
+) -> ([isize; 3], [usize; 3], Clipped) {
     let mut clipped = [[false; 2]; 3];
-    let mut lo = [0usize; 3];
+    let mut lo = [0isize; 3];
     let mut dims = [1usize; 3];
     match shape.level_set.bounds() {
         None => {
@@ -152,16 +163,25 @@ pub fn patch_box(
             let shrink = (shape.level_set.band() - reach).max(0.0);
             let (wlo, whi) = world_box(grid, state, bounds, shrink);
             for a in 0..grid.dim {
+                let n = grid.n[a];
                 let f0 = ((wlo[a] - grid.origin[a]) / grid.h).ceil();
                 let i1 = ((whi[a] - grid.origin[a]) / grid.h).floor();
-                clipped[a] = [f0 < 0.0, i1 > (grid.n[a] - 1) as f64];
+                if wrap && f0.is_finite() && i1.is_finite() {
+                    let (f0, i1) = (f0 as isize, i1 as isize);
+                    let len = (i1 - f0 + 1).max(0) as usize;
+                    let cut = len.saturating_sub(n);
+                    lo[a] = f0 + (cut / 2) as isize;
+                    dims[a] = len - cut;
+                    continue;
+                }
+                clipped[a] = [f0 < 0.0, i1 > (n - 1) as f64];
                 let i0 = f0.max(0.0) as usize;
                 let i1 = if i1 < 0.0 {
                     0
                 } else {
-                    (i1 as usize).min(grid.n[a] - 1)
+                    (i1 as usize).min(n - 1)
                 };
-                lo[a] = i0.min(grid.n[a] - 1);
+                lo[a] = i0.min(n - 1) as isize;
                 dims[a] = if i1 >= i0 { i1 - i0 + 1 } else { 0 };
             }
         }
@@ -176,13 +196,15 @@ pub fn patch_box(
 /// bundled scenes that happens where a body touches a wall that fills the box's edge.
 pub fn sample(
     grid: &Grid,
+    body: &Body,
     state: &RigidState,
     shape: &BodyShape,
     patch: &mut GridPatch,
     eps: f64,
     offset: f64,
 ) -> Option<usize> {
-    let (lo, dims, clipped) = patch_box(grid, state, shape, patch_reach(grid, eps));
+    let wrap = !body.is_static();
+    let (lo, dims, clipped) = patch_box(grid, state, shape, patch_reach(grid, eps), wrap);
     patch.lo = lo;
     patch.dims = dims;
     let len = dims[0] * dims[1] * dims[2];
@@ -194,13 +216,18 @@ pub fn sample(
     let ls = &shape.level_set;
     let row = dims[0].max(1);
     let GridPatch { phi, chi, .. } = patch;
+    let at = GridPatch {
+        lo,
+        dims,
+        ..Default::default()
+    };
     phi.par_chunks_mut(row)
         .zip(chi.par_chunks_mut(row))
         .enumerate()
         .for_each(|(r, (phi, chi))| {
             let (b, cc) = (r % dims[1], r / dims[1]);
             for a in 0..dims[0] {
-                let p = grid.pos(lo[0] + a, lo[1] + b, lo[2] + cc);
+                let p = at.pos(grid, a, b, cc);
                 let x = DVec3::new(p[0], p[1], p[2]);
                 let v = ls.phi(inv * (x - c));
                 phi[a] = v;
@@ -221,7 +248,7 @@ fn solid_on_clipped_side(
     state: &RigidState,
     shape: &BodyShape,
     phi: &[f64],
-    (lo, dims): ([usize; 3], [usize; 3]),
+    (lo, dims): ([isize; 3], [usize; 3]),
     clipped: &Clipped,
 ) -> Option<usize> {
     let inv = state.orientation.inverse();
@@ -242,7 +269,7 @@ fn solid_on_clipped_side(
                     } else {
                         let mut x = [0.0; 3];
                         for d in 0..3 {
-                            x[d] = grid.origin[d] + (lo[d] + ijk[d]) as f64 * grid.h;
+                            x[d] = grid.origin[d] + (lo[d] + ijk[d] as isize) as f64 * grid.h;
                         }
                         x[a] = grid.origin[a] + grid.n[a] as f64 * grid.h;
                         if grid.dim == 2 {

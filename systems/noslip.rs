@@ -233,17 +233,18 @@ pub fn noslip(
         let [dx, dy, _] = patch.dims;
         for row in 0..patch.len() / dx {
             let (b, c) = (row % dy, row / dy);
+            let nodes = patch.row(&grid, b, c);
             for a in 0..dx {
                 if rigid_region(patch.phi[row * dx + a]) == 0.0 {
                     continue;
                 }
-                let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
-                let g = grid.idx(i, j, k);
+                // The wrapped node for the fields, its image next to the body for the arm.
+                let g = nodes.index(a);
                 if ns.taken[g] {
                     continue;
                 }
                 ns.taken[g] = true;
-                let pos = grid.pos(i, j, k);
+                let pos = patch.pos(&grid, a, b, c);
                 let rv = DVec3::new(pos[0], pos[1], pos[2]) - state.centroid;
                 let ubar = state.velocity + state.angular_velocity.cross(rv);
                 reach = reach.max(ubar.length());

@@ -101,6 +101,7 @@ pub fn penalization(
                 .enumerate()
                 .for_each(|(r, acc)| {
                     let (b, c) = (r % dy, r / dy);
+                    let nodes = patch.row(&grid, b, c);
                     let mut f = DVec3::ZERO;
                     let mut m = DVec3::ZERO;
                     for a in 0..dx {
@@ -111,14 +112,15 @@ pub fn penalization(
                         if chi == 0.0 {
                             continue;
                         }
-                        let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
-                        let g = grid.idx(i, j, k);
-                        let p = grid.pos(i, j, k);
+                        // The wrapped node for the fields, its image next to the body for
+                        // the lever arm.
+                        let g = nodes.index(a);
+                        let p = patch.pos(&grid, a, b, c);
                         let rv = DVec3::new(p[0], p[1], p[2]) - st.centroid;
                         let ubar = st.velocity + st.angular_velocity.cross(rv);
                         let mut change = DVec3::ZERO;
                         for q in 0..dim {
-                            // SAFETY: distinct patch rows map to distinct grid nodes.
+                            // SAFETY: distinct patch nodes map to distinct grid nodes.
                             unsafe {
                                 let old = u[q].read(g);
                                 let new = if newton {

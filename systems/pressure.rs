@@ -298,10 +298,11 @@ fn reduced_potential(
         let o = crate::base::grid::SyncPtr(pot.as_mut_ptr());
         (0..patch.len() / dx).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
+            let nodes = patch.row(grid, b, c);
             for a in 0..dx {
                 if patch.chi[r * dx + a] > 0.0 {
-                    let g = patch.grid_index(grid, a, b, c);
-                    // SAFETY: distinct patch rows map to distinct grid nodes.
+                    let g = nodes.index(a);
+                    // SAFETY: distinct patch nodes map to distinct grid nodes.
                     unsafe { o.write(g, 0.0) };
                 }
             }
@@ -333,11 +334,12 @@ fn rigid_walls(
         let o = crate::base::grid::SyncPtr(out.as_mut_ptr());
         (0..patch.len() / dx).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
+            let nodes = patch.row(grid, b, c);
             for a in 0..dx {
                 let chi = patch.chi[r * dx + a];
                 if chi > 0.0 {
-                    let g = patch.grid_index(grid, a, b, c);
-                    // SAFETY: distinct patch rows map to distinct grid nodes.
+                    let g = nodes.index(a);
+                    // SAFETY: distinct patch nodes map to distinct grid nodes.
                     unsafe { o.write(g, o.read(g) * (1.0 + ldt * chi)) };
                 }
             }

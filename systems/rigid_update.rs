@@ -7,6 +7,13 @@
 //! origin c, which it follows exactly. Dynamic bodies use the ū computed from the flow this step,
 //! kinematic bodies their prescribed motion, static bodies stay. The velocities used are kept
 //! as the next step's previous velocity ([`PreviousVelocity`]).
+//!
+//! The box is periodic: a moving body whose centre leaves it is moved back by a box length
+//! along that axis (its centre and centroid together; its orientation, velocities and all
+//! body-frame data are unchanged), like the fluid that leaves through one face and enters
+//! through the opposite one. The stored centre, and the outputs (`bodies.csv`, snapshots),
+//! are therefore always inside `[origin, origin + extent)`; a distance travelled must be
+//! accumulated from the velocities, not read as a difference of positions.
 
 use crate::base::fields::SimTime;
 use crate::base::grid::Grid;
@@ -56,10 +63,21 @@ pub fn rigid_update(time: Res<SimTime>, grid: Res<Grid>, mut bodies: Query<Movin
             s.center += v * dt;
             s.orientation = (q * s.orientation).normalize();
             s.centroid = s.center + q * arm;
-            continue;
+        } else {
+            // A free body turns about its centroid, which moves with V.
+            *s = s.advanced(dt);
         }
-        // A free body turns about its centroid, which moves with V.
-        *s = s.advanced(dt);
+        wrap_into_box(&grid, &mut s);
+    }
+}
+
+/// Move a body whose centre left the periodic box back by whole box lengths (centre and
+/// centroid together). Nothing changes, bit for bit, when the centre is inside.
+pub fn wrap_into_box(grid: &Grid, s: &mut RigidState) {
+    let shift = DVec3::from_array(grid.wrap_shift(s.center.to_array()));
+    if shift != DVec3::ZERO {
+        s.center += shift;
+        s.centroid += shift;
     }
 }
 

@@ -78,6 +78,28 @@ impl Grid {
         ]
     }
 
+    /// The whole box lengths to add to point `x` to bring it into the periodic box
+    /// `[origin, origin + extent)` (zero along z in 2D, and along any axis where `x` is
+    /// already inside or not finite).
+    pub fn wrap_shift(&self, x: [f64; 3]) -> [f64; 3] {
+        let ext = self.extent();
+        let mut shift = [0.0; 3];
+        for a in 0..self.dim {
+            let s = ((x[a] - self.origin[a]) / ext[a]).floor();
+            if s.is_finite() && s != 0.0 {
+                shift[a] = -s * ext[a];
+                // Round-off may leave the point a hair outside: fix it up.
+                let y = x[a] + shift[a];
+                if y >= self.origin[a] + ext[a] {
+                    shift[a] -= ext[a];
+                } else if y < self.origin[a] {
+                    shift[a] += ext[a];
+                }
+            }
+        }
+        shift
+    }
+
     /// Volume (3D) or area (2D) of one cell.
     pub fn cell_volume(&self) -> f64 {
         self.h.powi(self.dim as i32)

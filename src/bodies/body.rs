@@ -137,11 +137,19 @@ pub struct BodyShape {
 }
 
 /// φ and χ of one body on the flow grid, over the box of nodes it can affect.
+///
+/// The box is the body's own: `lo` is its first node *unwrapped* (an index that may be
+/// negative or reach past `n - 1` when a moving body straddles the periodic box's boundary),
+/// and patch node `(a, b, c)` sits at the unwrapped position `origin + (lo + (a, b, c)) h`,
+/// next to the body, while it reads and writes grid node `(lo + (a, b, c)) mod n`
+/// ([`GridPatch::grid_index`], [`GridPatch::row`]). Lever arms, moments and contact points
+/// use the unwrapped position ([`GridPatch::pos`]); field access the wrapped index. A box is
+/// never longer than `n` along an axis, so each grid node appears at most once in it.
 #[derive(Component, Debug, Clone, Default)]
 pub struct GridPatch {
-    /// First node of the box (grid indices).
-    pub lo: [usize; 3],
-    /// Node counts of the box.
+    /// First node of the box (grid indices, unwrapped: may lie outside `0..n`).
+    pub lo: [isize; 3],
+    /// Node counts of the box (at most `n` per axis).
     pub dims: [usize; 3],
     /// φ at the box's nodes (x fastest).
     pub phi: Vec<f64>,
@@ -149,6 +157,27 @@ pub struct GridPatch {
     pub chi: Vec<f64>,
     /// Whether the patch holds the current pose (static bodies are sampled once).
     pub sampled: bool,
+}
+
+/// The grid nodes of one patch row along x: node `a` of the row is grid node
+/// [`PatchRow::index`]`(a)`, wrapping once past the grid's last node along x.
+#[derive(Debug, Clone, Copy)]
+pub struct PatchRow {
+    /// Grid index of the row's node at x index 0.
+    base: usize,
+    /// Wrapped x index of the row's first node.
+    i0: usize,
+    /// Nodes along x.
+    nx: usize,
+}
+
+impl PatchRow {
+    /// Grid index of the row's node `a`.
+    #[inline(always)]
+    pub fn index(&self, a: usize) -> usize {
+        let i = self.i0 + a;
+        self.base + if i >= self.nx { i - self.nx } else { i }
+    }
 }
 
 impl GridPatch {
@@ -160,10 +189,54 @@ impl GridPatch {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
-    /// Grid index of patch node `(a, b, c)`.
+    /// Grid index (wrapped) along `axis` of the patch's node `a` on that axis.
+    #[inline(always)]
+    pub fn wrapped(&self, grid: &Grid, axis: usize, a: usize) -> usize {
+        (self.lo[axis] + a as isize).rem_euclid(grid.n[axis] as isize) as usize
+    }
+    /// Grid index of patch node `(a, b, c)`, wrapped into the periodic grid.
     #[inline]
     pub fn grid_index(&self, grid: &Grid, a: usize, b: usize, c: usize) -> usize {
-        grid.idx(self.lo[0] + a, self.lo[1] + b, self.lo[2] + c)
+        grid.idx(
+            self.wrapped(grid, 0, a),
+            self.wrapped(grid, 1, b),
+            self.wrapped(grid, 2, c),
+        )
+    }
+    /// The grid nodes of patch row `(b, c)` (see [`PatchRow`]).
+    #[inline]
+    pub fn row(&self, grid: &Grid, b: usize, c: usize) -> PatchRow {
+        PatchRow {
+            base: grid.idx(0, self.wrapped(grid, 1, b), self.wrapped(grid, 2, c)),
+            i0: self.wrapped(grid, 0, 0),
+            nx: grid.n[0],
+        }
+    }
+    /// Unwrapped position of patch node `(a, b, c)`: next to the body, possibly outside the
+    /// box (the node's periodic image); z is 0 in 2D. Equal to `grid.pos` of the node when
+    /// the patch does not wrap.
+    #[inline(always)]
+    pub fn pos(&self, grid: &Grid, a: usize, b: usize, c: usize) -> [f64; 3] {
+        let x = |axis: usize, a: usize| {
+            grid.origin[axis] + (self.lo[axis] + a as isize) as f64 * grid.h
+        };
+        [x(0, a), x(1, b), if grid.dim == 3 { x(2, c) } else { 0.0 }]
+    }
+    /// The position `x` of a grid node of this patch moved by whole box lengths into the
+    /// patch's unwrapped window `[origin + lo h, origin + (lo + n) h)`: the image of the node
+    /// that [`GridPatch::pos`] gives. Unchanged (bit for bit) when it already lies there.
+    #[inline]
+    pub fn unwrap(&self, grid: &Grid, mut x: DVec3) -> DVec3 {
+        let ext = grid.extent();
+        for a in 0..grid.dim {
+            let lo = grid.origin[a] + self.lo[a] as f64 * grid.h - 0.5 * grid.h;
+            if x[a] < lo {
+                x[a] += ext[a];
+            } else if x[a] >= lo + ext[a] {
+                x[a] -= ext[a];
+            }
+        }
+        x
     }
 }
 
@@ -320,6 +393,9 @@ pub struct RigidAccel {
     pub centroid: DVec3,
     /// The body's density as the density field counts it (the fluid's for static bodies).
     pub density: f64,
+    /// The body's patch (see [`GridPatch`]), whose first node and extent place a grid node
+    /// at its image next to the body ([`RigidAccel::at_node`]).
+    pub window: ([isize; 3], [usize; 3]),
 }
 
 impl RigidAccel {
@@ -328,6 +404,20 @@ impl RigidAccel {
     pub fn at(&self, x: DVec3) -> DVec3 {
         let r = x - self.centroid;
         self.linear + self.angular.cross(r) + self.omega.cross(self.omega.cross(r))
+    }
+
+    /// The acceleration at grid node position `x` (inside the box), taken at the node's image
+    /// in the body's patch (a body straddling the periodic boundary owns nodes on both
+    /// sides of the box).
+    #[inline]
+    pub fn at_node(&self, grid: &Grid, x: DVec3) -> DVec3 {
+        let (lo, dims) = self.window;
+        let patch = GridPatch {
+            lo,
+            dims,
+            ..Default::default()
+        };
+        self.at(patch.unwrap(grid, x))
     }
 }
 

@@ -117,15 +117,17 @@ pub fn integrate_n<const N: usize>(
         .enumerate()
         .for_each(|(r, acc)| {
             let (b, c) = (r % dy, r / dy);
+            let nodes = patch.row(grid, b, c);
             let mut s = [ZERO; N];
             for a in 0..dx {
-                let (i, j, k) = (patch.lo[0] + a, patch.lo[1] + b, patch.lo[2] + c);
-                let g = grid.idx(i, j, k);
+                // The wrapped node for the fields, its image next to the body (unwrapped
+                // position) for the moments.
+                let g = nodes.index(a);
                 let w = weight(patch.chi[r * dx + a], patch.phi[r * dx + a], g);
                 if w.iter().all(|&chi| chi == 0.0) {
                     continue;
                 }
-                let p = grid.pos(i, j, k);
+                let p = patch.pos(grid, a, b, c);
                 let rv = DVec3::new(p[0], p[1], p[2]) - center;
                 let uv = DVec3::new(u[0][g], u[1][g], if dim == 3 { u[2][g] } else { 0.0 });
                 let m = rv.cross(uv);

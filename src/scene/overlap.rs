@@ -4,7 +4,8 @@
 //! Every pair with a dynamic body is checked: bounding spheres first, then the level sets are
 //! sampled on a lattice of spacing h/2 over the part of the domain both bodies' boxes cover.
 //! A pair overlaps if some point lies more than half a cell inside both (bodies that touch
-//! or sit within the contact range are fine).
+//! or sit within the contact range are fine). Two bounded moving bodies are compared through
+//! the nearest periodic image of the second (they may overlap across the box's boundary).
 
 use crate::base::grid::Grid;
 use crate::bodies::BodyKind;
@@ -71,14 +72,37 @@ pub fn initial_overlap(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> O
                 continue;
             }
             let (pa, pb) = (&placed[a], &placed[b]);
+            // The box is periodic for moving bodies: two bounded ones are compared through
+            // b's image nearest a (they may touch across the boundary).
+            let moving = |i: usize| !matches!(scene.bodies[i].kind, BodyKind::Static);
+            let bounded = pa.radius.is_some() && pb.radius.is_some();
+            let image;
+            let pb = if bounded && moving(a) && moving(b) {
+                let ext = grid.extent();
+                let d = pb.center - pa.center;
+                let mut shift = DVec3::ZERO;
+                for k in 0..dim {
+                    shift[k] = -(d[k] / ext[k]).round() * ext[k];
+                }
+                image = Placed {
+                    center: pb.center + shift,
+                    ..*pb
+                };
+                &image
+            } else {
+                pb
+            };
             if let (Some(ra), Some(rb)) = (pa.radius, pb.radius)
                 && pa.center.distance(pb.center) >= ra + rb
             {
                 continue;
             }
-            // The box both bounding spheres (and the domain) cover.
-            let mut lo = dom_lo;
-            let mut hi = dom_hi;
+            // The box both bounding spheres (and, unless both are bounded, the domain) cover.
+            let (mut lo, mut hi) = if bounded {
+                (DVec3::splat(f64::NEG_INFINITY), DVec3::splat(f64::INFINITY))
+            } else {
+                (dom_lo, dom_hi)
+            };
             for p in [pa, pb] {
                 if let Some(r) = p.radius {
                     lo = lo.max(p.center - DVec3::splat(r));

@@ -117,6 +117,7 @@ pub const CASES: &[Case] = &[
     cases::sedimentation_2d::CASE,
     cases::sphere_settling::CASE,
     cases::stokes_settling::CASE,
+    cases::periodic_array::CASE,
     cases::dt_independence::CASE,
     cases::added_mass::CASE,
     cases::stratified_rest::CASE,

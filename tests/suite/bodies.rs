@@ -102,7 +102,7 @@ fn level_set_error(s: &mut Simulation, h: f64) -> (f64, usize) {
             if phi.abs() > h {
                 continue;
             }
-            let p = grid.pos(patch.lo[0] + a, patch.lo[1] + b, 0);
+            let p = patch.pos(&grid, a, b, 0);
             let x = DVec3::new(p[0], p[1], 0.0);
             let exact = geom.phi(rot.inverse() * (x - center));
             worst = worst.max((phi - exact).abs());
@@ -221,31 +221,38 @@ fn body_outside_the_domain_is_rejected() {
 }
 
 #[test]
-fn body_reaching_outside_the_periodic_box_stops_the_run_naming_it() {
+fn static_body_reaching_outside_the_periodic_box_stops_the_run_naming_it() {
     // Centre inside, but the disk (r = 0.1) crosses the box's edge (the last node is at
-    // 31/32): its level-set patch would be clipped, not wrapped, losing part of the body. The
-    // run stops at the first step with an error naming the body and the axis.
+    // 31/32). A static body's patch is clipped, not wrapped (walls keep their clipped band),
+    // so part of it would be lost: the run stops at the first step with an error naming the
+    // body and the axis. A moving body there wraps around the periodic box and runs
+    // (tests/suite/periodic_bodies.rs).
     for (pos, axis) in [("[0.08, 0.5]", "along x"), ("[0.5, 0.92]", "along y")] {
-        let mut s = sim(&format!(
-            r#"Scene(
+        let scene = |kind: &str| {
+            format!(
+                r#"Scene(
             domain: (extent: [1.0, 1.0], cells: [32, 32]),
             numerics: (dt: Fixed(0.001), end_time: 1.0),
-            bodies: [(name: "edge-disk", shape: Disk(radius: 0.1), position: {pos})],
+            bodies: [(name: "edge-disk", shape: Disk(radius: 0.1), position: {pos}{kind})],
         )"#
-        ));
+            )
+        };
+        let mut s = sim(&scene(", kind: Static"));
         let e = s.step().unwrap_err().to_string();
-        assert!(e.contains("`edge-disk`"), "{e}");
+        assert!(e.contains("static body `edge-disk`"), "{e}");
         assert!(
             e.contains("outside the periodic box") && e.contains(axis),
             "{e}"
         );
+        sim(&scene("")).step().unwrap();
     }
-    // A body inside the nodes runs, even with its interface band at the edge: r = 0.1 at
-    // 0.11 from the edge.
+    // A static body inside the nodes runs, even with its interface band at the edge: r = 0.1
+    // at 0.11 from the edge.
     let mut s = sim(r#"Scene(
         domain: (extent: [1.0, 1.0], cells: [32, 32]),
         numerics: (dt: Fixed(0.001), end_time: 1.0),
-        bodies: [(name: "inside", shape: Disk(radius: 0.1), position: [0.11, 0.5])],
+        bodies: [(name: "inside", shape: Disk(radius: 0.1), kind: Static,
+                  position: [0.11, 0.5])],
     )"#);
     s.step().unwrap();
 }

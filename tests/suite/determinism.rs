@@ -159,3 +159,25 @@ fn bodies_in_contact_in_vacuum_do_not_depend_on_threads() {
     let b = run_with_bodies(2, &text, steps);
     assert_same(&a, &b, steps);
 }
+
+/// Spheres in an open periodic box touching each other through its boundary (corner and
+/// faces) from the first step, their patches wrapped along x, y and z: the wrapped patch rows
+/// (two grid segments each) and the image pairs of the contact are thread-count independent.
+#[test]
+fn bodies_across_the_periodic_boundary_do_not_depend_on_threads() {
+    let text = r#"Scene(
+        domain: (extent: [1.0, 1.0, 1.0], cells: [20, 20, 20]),
+        fluid: (density: 1.0, viscosity: 0.01, gravity: [0.0, 0.0, -20.0]),
+        numerics: (dt: Adaptive(c: 0.5, dt_max: 0.005), end_time: 1.0),
+        contact: (kappa: 1.0),
+        bodies: [
+            (name: "a", shape: Sphere(radius: 0.1), density: 1.5, position: [0.02, 0.03, 0.05]),
+            (name: "b", shape: Sphere(radius: 0.1), density: 2.0, position: [0.81, 0.02, 0.04]),
+            (name: "c", shape: Sphere(radius: 0.1), density: 1.2, position: [0.03, 0.5, 0.83]),
+        ],
+    )"#;
+    let steps = 6;
+    let a = run_with_bodies(1, text, steps);
+    let b = run_with_bodies(2, text, steps);
+    assert_same(&a, &b, steps);
+}

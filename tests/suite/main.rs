@@ -22,6 +22,7 @@ mod layers;
 mod motion_law;
 mod multigrid;
 mod output;
+mod periodic_bodies;
 mod plot;
 mod readme;
 mod reports;

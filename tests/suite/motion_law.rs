@@ -241,13 +241,9 @@ mod no_slip {
                 if patch.phi[row * dx + a] <= 0.0 {
                     continue;
                 }
-                let (i, j, k) = (
-                    patch.lo[0] + a,
-                    patch.lo[1] + row % dy,
-                    patch.lo[2] + row / dy,
-                );
-                let g = grid.idx(i, j, k);
-                let p = grid.pos(i, j, k);
+                let (b, c) = (row % dy, row / dy);
+                let g = patch.grid_index(grid, a, b, c);
+                let p = patch.pos(grid, a, b, c);
                 let r = DVec3::new(p[0], p[1], p[2]) - st.centroid;
                 let ub = st.velocity + st.angular_velocity.cross(r);
                 let du = DVec3::new(fields.u[0][g], fields.u[1][g], fields.u[2][g]) - ub;

@@ -12,6 +12,7 @@ pub mod floating;
 pub mod high_re_sphere;
 pub mod kleefsman;
 pub mod lamb_oseen;
+pub mod periodic_array;
 pub mod poisson;
 pub mod pool_drop;
 pub mod rayleigh_taylor;
