@@ -59,7 +59,7 @@ pub fn baroclinic(
                 omega: st.angular_velocity,
                 centroid: st.centroid,
                 density: mat.density,
-                window: (patch.lo, patch.dims),
+                patch_lo: patch.lo,
             }
         };
     }

@@ -18,7 +18,7 @@
 
 use crate::base::fields::{Failure, Params, SimTime};
 use crate::base::grid::Grid;
-use crate::bodies::{Body, BodyShape, GridPatch, RigidState, heaviside};
+use crate::bodies::{Body, BodyShape, GridPatch, RigidState, heaviside, patch_pos};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -216,18 +216,13 @@ pub fn sample(
     let ls = &shape.level_set;
     let row = dims[0].max(1);
     let GridPatch { phi, chi, .. } = patch;
-    let at = GridPatch {
-        lo,
-        dims,
-        ..Default::default()
-    };
     phi.par_chunks_mut(row)
         .zip(chi.par_chunks_mut(row))
         .enumerate()
         .for_each(|(r, (phi, chi))| {
             let (b, cc) = (r % dims[1], r / dims[1]);
             for a in 0..dims[0] {
-                let p = at.pos(grid, a, b, cc);
+                let p = patch_pos(grid, lo, a, b, cc);
                 let x = DVec3::new(p[0], p[1], p[2]);
                 let v = ls.phi(inv * (x - c));
                 phi[a] = v;

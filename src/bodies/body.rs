@@ -217,27 +217,37 @@ impl GridPatch {
     /// the patch does not wrap.
     #[inline(always)]
     pub fn pos(&self, grid: &Grid, a: usize, b: usize, c: usize) -> [f64; 3] {
-        let x = |axis: usize, a: usize| {
-            grid.origin[axis] + (self.lo[axis] + a as isize) as f64 * grid.h
-        };
-        [x(0, a), x(1, b), if grid.dim == 3 { x(2, c) } else { 0.0 }]
+        patch_pos(grid, self.lo, a, b, c)
     }
     /// The position `x` of a grid node of this patch moved by whole box lengths into the
     /// patch's unwrapped window `[origin + lo h, origin + (lo + n) h)`: the image of the node
     /// that [`GridPatch::pos`] gives. Unchanged (bit for bit) when it already lies there.
     #[inline]
-    pub fn unwrap(&self, grid: &Grid, mut x: DVec3) -> DVec3 {
-        let ext = grid.extent();
-        for a in 0..grid.dim {
-            let lo = grid.origin[a] + self.lo[a] as f64 * grid.h - 0.5 * grid.h;
-            if x[a] < lo {
-                x[a] += ext[a];
-            } else if x[a] >= lo + ext[a] {
-                x[a] -= ext[a];
-            }
-        }
-        x
+    pub fn unwrap(&self, grid: &Grid, x: DVec3) -> DVec3 {
+        patch_unwrap(grid, self.lo, x)
     }
+}
+
+/// [`GridPatch::pos`] of a patch whose first node is `lo`.
+#[inline(always)]
+pub fn patch_pos(grid: &Grid, lo: [isize; 3], a: usize, b: usize, c: usize) -> [f64; 3] {
+    let x = |axis: usize, a: usize| grid.origin[axis] + (lo[axis] + a as isize) as f64 * grid.h;
+    [x(0, a), x(1, b), if grid.dim == 3 { x(2, c) } else { 0.0 }]
+}
+
+/// [`GridPatch::unwrap`] of a patch whose first node is `lo`.
+#[inline]
+pub fn patch_unwrap(grid: &Grid, lo: [isize; 3], mut x: DVec3) -> DVec3 {
+    let ext = grid.extent();
+    for a in 0..grid.dim {
+        let lo = grid.origin[a] + lo[a] as f64 * grid.h - 0.5 * grid.h;
+        if x[a] < lo {
+            x[a] += ext[a];
+        } else if x[a] >= lo + ext[a] {
+            x[a] -= ext[a];
+        }
+    }
+    x
 }
 
 /// Hydrodynamic force and torque on a body (from the penalization term), world frame.
@@ -393,9 +403,9 @@ pub struct RigidAccel {
     pub centroid: DVec3,
     /// The body's density as the density field counts it (the fluid's for static bodies).
     pub density: f64,
-    /// The body's patch (see [`GridPatch`]), whose first node and extent place a grid node
-    /// at its image next to the body ([`RigidAccel::at_node`]).
-    pub window: ([isize; 3], [usize; 3]),
+    /// The first node of the body's patch (see [`GridPatch`]), which places a grid node at
+    /// its image next to the body ([`RigidAccel::at_node`]).
+    pub patch_lo: [isize; 3],
 }
 
 impl RigidAccel {
@@ -411,13 +421,7 @@ impl RigidAccel {
     /// sides of the box).
     #[inline]
     pub fn at_node(&self, grid: &Grid, x: DVec3) -> DVec3 {
-        let (lo, dims) = self.window;
-        let patch = GridPatch {
-            lo,
-            dims,
-            ..Default::default()
-        };
-        self.at(patch.unwrap(grid, x))
+        self.at(patch_unwrap(grid, self.patch_lo, x))
     }
 }
 
