@@ -38,9 +38,10 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
         );
         let density = resolved.densities[id];
         // Newton-Euler or the projection: decided once, from the density and the shape. With
-        // a free surface every body stays `Projected`: the phase inside a moving body is the
-        // one its rigid motion carried in, not the fluid it displaces now, and Newton-Euler
-        // would take its buoyancy from it.
+        // a free surface every body stays `Projected`, whose projection holds the body's
+        // inertia implicitly: Newton-Euler's virtual mass lags the acceleration, and against
+        // a floating body's restoring moment the lag capsized the boxes of `floating`
+        // (docs/numerics.md, "The momentum form").
         let params = &resolved.params;
         let exact_volume = geom.volume().unwrap_or(0.0);
         let (law, virtual_mass) = match spec.kind {

@@ -25,7 +25,7 @@ pub const CASE: Case = Case {
             row: "the cup ends on the floor",
             quick: true,
             full: true,
-            why: "in momentum form (issue 44) the 48^3 run at the paper's 1:1000 reaches t = 0.6: the cup enters the water, its centre rises 0.083 after the impact, it turns (7.6 rad per unit time), the liquid volume outside the bodies holds to 2e-12, but at t = 0.6 its centre is still 0.77 cup heights above the floor (0.71 asked; 0.87 when the volume kept counted the liquid continued inside the cup; 0.79 at 1:100; 1.21 at 1:100 in vorticity form): it has not filled and sunk yet; the bodies in a free surface still move by the projection; issues 34 and 44",
+            why: "in momentum form (issue 44) the 48^3 run at the paper's 1:1000 reaches t = 0.6: the cup enters the water, its centre rises 0.083 after the impact, it turns (7.6 rad per unit time), the liquid volume outside the bodies holds to 2e-12, but at t = 0.6 its centre is still 0.77 cup heights above the floor (0.71 asked; 0.87 when the volume kept counted the liquid continued inside the cup; 0.79 at 1:100; 1.21 at 1:100 in vorticity form): it has not filled and sunk yet; the bodies in a free surface move by the projection (by Newton-Euler with its virtual mass the cup ended at 0.84, and floating boxes capsized: docs/numerics.md); issues 34 and 44",
         },
     ],
 };

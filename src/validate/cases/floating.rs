@@ -26,7 +26,7 @@ pub const CASE: Case = Case {
             row: "box of density 0.25, 1:100, h = 1/64: largest relative growth",
             quick: true,
             full: true,
-            why: "+8.53 of the peak before at h = 1/64 (peaks 15.00 7.66 5.11 5.07 4.67 5.55 3.81 4.05 3.97 3.09 0.28 2.67 1.87 0.78 0.68 0.69 0.43 0.43 0.16 0.18 1.07 3.24 2.64 1.38 0.90): the box of density 0.25 draws 1.6 cells, within the free surface's smoothed band, and its roll keeps wandering between about 0.2 and 3 degrees; alone in the same tank (no other body, no wave from them) it wanders as much (last quarter up to 2.17 degrees, 1.87 before the liquid volume was kept outside the bodies), so it is not the other bodies' waves; the bodies in a free surface still move by the projection, not Newton-Euler; issues 35 and 44",
+            why: "+8.53 of the peak before at h = 1/64 (peaks 15.00 7.66 5.11 5.07 4.67 5.55 3.81 4.05 3.97 3.09 0.28 2.67 1.87 0.78 0.68 0.69 0.43 0.43 0.16 0.18 1.07 3.24 2.64 1.38 0.90): the box of density 0.25 draws 1.6 cells, within the free surface's smoothed band, and its roll keeps wandering between about 0.2 and 3 degrees; alone in the same tank (no other body, no wave from them) it wanders as much (last quarter up to 2.17 degrees, 1.87 before the liquid volume was kept outside the bodies), so it is not the other bodies' waves; the bodies in a free surface move by the projection (by Newton-Euler, explicit with a virtual mass, the lagged acceleration against the restoring moment capsized all three boxes: docs/numerics.md); issues 35 and 44",
         },
         KnownFailure {
             row: "box of density 0.25, 1:100, h = 1/64: largest roll",
@@ -56,7 +56,7 @@ pub const CASE: Case = Case {
             row: "1:100, h = 1/64: largest rise",
             quick: true,
             full: true,
-            why: "a rise of 9.731e-4 from t = 3.29 to 4.99 (energy 0.564151 after the first step, 0.555421 at the end), while the light disk bobs at the waterline (its centre from 0.616 down to 0.578 and up to 0.628), 20 times its heave energy: the energy is lost again by t = 6. With the liquid volume kept outside the bodies (it was kept with the liquid continued inside them) the rise fell from 9.986e-3 (the liquid outside the bodies grew by 0.012 as the disk surfaced); the bodies in the free surface still move by the projection; issues 35 and 44",
+            why: "a rise of 9.731e-4 from t = 3.29 to 4.99 (energy 0.564151 after the first step, 0.555421 at the end), while the light disk bobs at the waterline (its centre from 0.616 down to 0.578 and up to 0.628), 20 times its heave energy: the energy is lost again by t = 6. With the liquid volume kept outside the bodies (it was kept with the liquid continued inside them) the rise fell from 9.986e-3 (the liquid outside the bodies grew by 0.012 as the disk surfaced); the bodies in the free surface move by the projection (by Newton-Euler the rise was 94 heel energies: docs/numerics.md); issues 35 and 44",
         },
         KnownFailure {
             row: "box of density 0.25, 1:100, h = 1/128: largest relative growth",
