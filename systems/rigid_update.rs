@@ -8,6 +8,16 @@
 //! kinematic bodies their prescribed motion, static bodies stay. The velocities used are kept
 //! as the next step's previous velocity ([`PreviousVelocity`]).
 //!
+//! For a body that moves by Newton-Euler (`MotionLaw::NewtonEuler`) the hydrodynamic force and
+//! torque reported ([`Hydro`], `bodies.csv`) are set here from the motion the step gave it:
+//! F = m a - m g and T = J α + Ω × (J Ω), with m = ρ_i V_i, J = ρ_i J_i, and a, α the
+//! acceleration over the step without the contact's part: the whole force of the fluid on the
+//! body, buoyancy included, as the projected bodies report it. The parts the systems before
+//! add up (the flow's impulse on the rigid region in `rigid_velocity`, the no-slip's reaction in
+//! `noslip`) act on different masses, the rigid region's fluid and the body's mass beyond it,
+//! and their sum is not the body's force (a disk of density 2 settling at its terminal
+//! velocity summed to half its excess weight).
+//!
 //! The box is periodic: a moving body whose centre leaves it is moved back by a box length
 //! along that axis (its centre and centroid together; its orientation, velocities and all
 //! body-frame data are unchanged), like the fluid that leaves through one face and enters
@@ -15,11 +25,13 @@
 //! are therefore always inside `[origin, origin + extent)`; a distance travelled must be
 //! accumulated from the velocities, not read as a difference of positions.
 
-use crate::base::fields::SimTime;
+use crate::base::fields::{Params, SimTime};
 use crate::base::grid::Grid;
 use crate::bodies::contact::contact_velocity_change;
+use crate::bodies::coupling::MotionLaw;
 use crate::bodies::{
-    Body, ContactState, Material, PreviousVelocity, RigidState, kinematic_velocity,
+    Body, ContactState, Hydro, Material, PreviousVelocity, RigidState, ShapeVolume,
+    kinematic_velocity,
 };
 use bevy_ecs::prelude::*;
 use glam::{DQuat, DVec3};
@@ -30,12 +42,19 @@ type Moving = (
     &'static mut RigidState,
     &'static mut PreviousVelocity,
     Option<(&'static Material, &'static ContactState)>,
+    Option<(&'static MotionLaw, &'static ShapeVolume, &'static mut Hydro)>,
 );
 
 /// The rigid-update system.
-pub fn rigid_update(time: Res<SimTime>, grid: Res<Grid>, mut bodies: Query<Moving>) {
+pub fn rigid_update(
+    time: Res<SimTime>,
+    grid: Res<Grid>,
+    params: Res<Params>,
+    mut bodies: Query<Moving>,
+) {
     let dt = time.dt;
-    for (body, mut s, mut prev, contact) in &mut bodies {
+    let g = DVec3::from_array(params.gravity);
+    for (body, mut s, mut prev, contact, newton) in &mut bodies {
         if body.is_static() {
             continue;
         }
@@ -54,6 +73,25 @@ pub fn rigid_update(time: Res<SimTime>, grid: Res<Grid>, mut bodies: Query<Movin
             acceleration: (s.velocity - prev.velocity - dv) * inv_dt,
             angular_acceleration: (s.angular_velocity - prev.angular_velocity - dw) * inv_dt,
         };
+        if let (Some((mat, _)), Some((MotionLaw::NewtonEuler, volume, mut hydro))) =
+            (contact, newton)
+            && dt > 0.0
+            && s.volume > 0.0
+        {
+            // The body's mass and inertia (the shape's exact volume where it has one, as its
+            // Newton-Euler update takes).
+            let v = if volume.0 > 0.0 { volume.0 } else { s.volume };
+            let (m, j) = (mat.density * v, s.inertia * (mat.density * v / s.volume));
+            let w = s.angular_velocity;
+            *hydro = Hydro {
+                force: m * (prev.acceleration - g),
+                torque: if grid.dim == 3 {
+                    j * prev.angular_acceleration + w.cross(j * w)
+                } else {
+                    j * prev.angular_acceleration
+                },
+            };
+        }
         if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {
             // A prescribed motion is that of the body frame's origin.
             s.velocity = v;

@@ -232,9 +232,10 @@ fn a_disk_settles_through_the_boundary_again_and_again() {
     // Sideways: the disk falls straight (symmetric about x = 0.5 to round-off).
     // The fluid's force on the disk (`Hydro`), averaged over each whole traversal of the
     // steady, box-periodic motion: the same from one traversal to the next (to the velocity's
-    // noise, a fraction of a per cent), so crossing the boundary adds no force. (Its value,
-    // about half of the excess weight (ρ_b - ρ_F) π a² g, is the force as `Hydro` reports it
-    // under the default coupling, not checked here.)
+    // noise, a fraction of a per cent), so crossing the boundary adds no force; and, the
+    // motion being steady, it carries the disk's whole weight ρ_b π a² |g| (buoyancy and
+    // drag). (Before the force was taken from the body's motion, the parts the flow and the
+    // no-slip report summed to about a quarter of it, half the excess weight.)
     let fmean =
         |a: usize, b: usize| force[a..b].iter().fold(DVec3::ZERO, |s, f| s + *f) / (b - a) as f64;
     let forces: Vec<DVec3> = traversal_start
@@ -242,6 +243,13 @@ fn a_disk_settles_through_the_boundary_again_and_again() {
         .map(|w| fmean(w[0], w[1]))
         .collect();
     eprintln!("mean hydrodynamic force per traversal {forces:?}");
+    let weight = 2.0 * std::f64::consts::PI * 0.1 * 0.1;
+    for f in &forces[1..] {
+        assert!(
+            (f.y - weight).abs() < 5e-3 * weight && f.x.abs() < 5e-3 * weight,
+            "the fluid's force {f:?} does not carry the weight {weight:.5} of a steadily settling disk"
+        );
+    }
     for w in forces[1..].windows(2) {
         assert!(
             (w[1] - w[0]).length() < 5e-3 * w[1].length(),
