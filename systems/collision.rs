@@ -356,11 +356,8 @@ fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodi
             if y == x || (past(&boxes[y].aabb.unwrap()) && y < x) {
                 continue;
             }
-            let mut shift = DVec3::ZERO;
             let d = boxes[y].center - boxes[x].center;
-            for a in 0..dim {
-                shift[a] = -(d[a] / ext[a]).round() * ext[a];
-            }
+            let shift = DVec3::from_array(grid.image_shift(d.to_array()));
             if shift == DVec3::ZERO {
                 continue;
             }

@@ -384,10 +384,7 @@ fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
             // A moving body is seen through its periodic image nearest the node.
             let mut d = x - st.center;
             if !b.is_static() {
-                let ext = grid.extent();
-                for a in 0..grid.dim {
-                    d[a] -= (d[a] / ext[a]).round() * ext[a];
-                }
+                d += glam::DVec3::from_array(grid.image_shift(d.to_array()));
             }
             let local = st.orientation.inverse() * d;
             (b, shape.level_set.phi(local))

@@ -387,16 +387,14 @@ pub fn noslip(
     }
     // The vorticity of the force the flow took; the bodies take the reaction.
     spectral.forcing_vorticity_add(omega, &mut ns.scratch);
-    let dt = time.dt;
     for rec in &ns.bodies {
-        let Ok((_, _, _, mut state, _, _, _, _, mut hydro)) = bodies.get_mut(rec.entity) else {
+        let Ok((_, _, _, mut state, _, _, _, _, _)) = bodies.get_mut(rec.entity) else {
             continue;
         };
-        // rec.force = ρ_F Σ W x h^d: the momentum the fluid took.
+        // rec.force = ρ_F Σ W x h^d: the momentum the fluid took. (The body's reported force
+        // is set from its motion by `rigid_update`.)
         state.velocity -= rec.force * (rec.inv_e / rho_f);
         state.angular_velocity -= solve_inertia(dim, rec.j_e, rec.torque);
-        hydro.force -= rec.force / dt;
-        hydro.torque -= rec.torque / dt;
     }
 }
 

@@ -83,13 +83,10 @@ pub fn rigid_update(
             let v = if volume.0 > 0.0 { volume.0 } else { s.volume };
             let (m, j) = (mat.density * v, s.inertia * (mat.density * v / s.volume));
             let w = s.angular_velocity;
+            // (In 2D Ω and JΩ are along z, and the gyroscopic term is zero.)
             *hydro = Hydro {
                 force: m * (prev.acceleration - g),
-                torque: if grid.dim == 3 {
-                    j * prev.angular_acceleration + w.cross(j * w)
-                } else {
-                    j * prev.angular_acceleration
-                },
+                torque: j * prev.angular_acceleration + w.cross(j * w),
             };
         }
         if let Some((v, w)) = kinematic_velocity(&body.kind, time.t) {

@@ -262,6 +262,9 @@ pub fn rigid_velocity(
                 j_body,
                 ang + e_rho * (j_old * w_prev) + spin_lag + torque_impulse,
             );
+            // The flow's impulse on the rigid region per unit time: the scale of the no-slip's
+            // stop test (`noslip`); the force reported is set from the motion by
+            // `rigid_update`.
             *hydro = Hydro {
                 force: p_fluid / dt,
                 torque: l_fluid / dt,

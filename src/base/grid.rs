@@ -100,6 +100,18 @@ impl Grid {
         shift
     }
 
+    /// The whole box lengths to add to a separation `d` between two points to make it the
+    /// separation from the first to the second's periodic image nearest it (zero along z in
+    /// 2D).
+    pub fn image_shift(&self, d: [f64; 3]) -> [f64; 3] {
+        let ext = self.extent();
+        let mut shift = [0.0; 3];
+        for a in 0..self.dim {
+            shift[a] = -(d[a] / ext[a]).round() * ext[a];
+        }
+        shift
+    }
+
     /// Volume (3D) or area (2D) of one cell.
     pub fn cell_volume(&self) -> f64 {
         self.h.powi(self.dim as i32)

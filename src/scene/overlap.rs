@@ -78,12 +78,7 @@ pub fn initial_overlap(scene: &Scene, grid: &Grid, geoms: &[ShapeGeometry]) -> O
             let bounded = pa.radius.is_some() && pb.radius.is_some();
             let image;
             let pb = if bounded && moving(a) && moving(b) {
-                let ext = grid.extent();
-                let d = pb.center - pa.center;
-                let mut shift = DVec3::ZERO;
-                for k in 0..dim {
-                    shift[k] = -(d[k] / ext[k]).round() * ext[k];
-                }
+                let shift = DVec3::from_array(grid.image_shift((pb.center - pa.center).to_array()));
                 image = Placed {
                     center: pb.center + shift,
                     ..*pb

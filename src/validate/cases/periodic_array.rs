@@ -15,10 +15,7 @@
 //! radius and the same 2% tolerance: U_H is then half of Stokes's, and the same absolute error
 //! of the staircase of rigid nodes is a larger relative one, which is why a row may fail
 //! where `stokes-settling`'s reached -2.6%.
-//!
-//! Measured (2026-11-27, shared 2-core machine): h = 1/16, U / U_Hasimoto 1.0089 to 1.0090
-//! over each traversal (quick tier 26 s); h = 1/24, 0.9821 / 0.9832 / 0.9844 / 0.9851, a slow
-//! numerical creep of 0.1% per traversal (see docs/numerics.md, issue 45).
+//! Its measurements are in docs/numerics.md (issue 45).
 
 use super::common::{MODEL, dynamic_body};
 use crate::scene::Scene;
