@@ -3,17 +3,22 @@
 //! bodies far denser or lighter than the fluid), where the constant-coefficient FFT inverse
 //! loses its grip: its iterations grow with the contrast, the V-cycle's hardly do.
 //!
-//! - Levels: each axis is coarsened by 2 (or by 3 when its node count is odd), while the
-//!   coarse spacing along it stays within twice the finest spacing of the level, until no axis
-//!   can be coarsened or the level has at most [`COARSEST`] nodes.
-//! - Transfer: piecewise constant. A coarse node is the aggregate of the `f₀ f₁ f₂` fine nodes
-//!   of its block; restriction sums them, prolongation copies the coarse value to each.
+//! - Levels: each axis is coarsened by 2 when its node count is even, by 3 when it is an odd
+//!   multiple of 3, and otherwise by 2 with the axis' last aggregate three nodes wide (so a
+//!   node count with a large prime factor, 71 or 2·13, coarsens as well as a power of two),
+//!   while the coarse spacing along it stays within twice the finest spacing of the level,
+//!   until the level has at most [`COARSEST`] nodes.
+//! - Transfer: piecewise constant. A coarse node is the aggregate of the fine nodes of its
+//!   block (`f₀ f₁ f₂` of them, or a wider last aggregate); restriction sums them,
+//!   prolongation copies the coarse value to each.
 //! - Coarse operator: the face coefficient between two coarse nodes along axis a is the sum of
-//!   the fine coefficients crossing that coarse face, divided by f_a. The Galerkin product
-//!   PᵀAP with piecewise-constant P sums them; its energy of a smooth field is f_a times too
-//!   large (the aggregate's jumps), which the division removes. For β = 1 this is the coarse
-//!   finite-volume Laplacian, and across a density jump it keeps the fine faces' harmonic
-//!   weighting (Basilisk's multigrid restricts its face coefficients the same way).
+//!   the fine coefficients crossing that coarse face, divided by the distance between the two
+//!   aggregates' centres in fine spacings (f_a between uniform aggregates). The Galerkin
+//!   product PᵀAP with piecewise-constant P sums them; its energy of a smooth field is that
+//!   distance times too large (the aggregate's jumps), which the division removes. For β = 1
+//!   this is the coarse finite-volume Laplacian, and across a density jump it keeps the fine
+//!   faces' harmonic weighting (Basilisk's multigrid restricts its face coefficients the same
+//!   way).
 //! - Smoother: red-black Gauss-Seidel, red then black before the coarse correction and black
 //!   then red after it, so the cycle is a symmetric operator; on a level with an odd node count
 //!   (where red-black colouring breaks at the periodic wrap) damped Jacobi instead. On the
@@ -31,9 +36,10 @@ use rayon::prelude::*;
 pub const COARSEST: usize = 512;
 /// Symmetric Gauss-Seidel sweeps (forward and backward) on the coarsest level.
 pub const COARSEST_SWEEPS: usize = 20;
-/// The most nodes a coarsest level may have for the hierarchy to be worth using: node counts
-/// with large prime factors stop the coarsening early, and the coarsest level's sweeps (one
-/// thread) neither converge nor stay cheap on a large grid.
+/// The most nodes a coarsest level may have for the hierarchy to be worth using: the coarsest
+/// level's sweeps (one thread) neither converge nor stay cheap on a large grid. Every axis of
+/// two or more nodes coarsens, so only a grid whose smallest spacing lies along an axis of one
+/// node (a 3D grid one node thick) can stop above it.
 pub const MAX_COARSEST: usize = 4096;
 /// Weight of the damped Jacobi smoother.
 const JACOBI_WEIGHT: f64 = 0.8;
@@ -69,22 +75,35 @@ pub struct Multigrid {
     levels: Vec<Level>,
 }
 
-/// Factors by which to coarsen each axis of a level with `n` nodes (1 = not coarsened): 2 if
-/// the count is even, else 3 if it divides it, only where the axis' spacing `s` (in fine
-/// spacings) is less than twice the smallest spacing of the level.
+/// Factors by which to coarsen each axis of a level with `n` nodes (1 = not coarsened): 3 if
+/// the count is an odd multiple of 3, else 2 (the last aggregate three wide when the count is
+/// odd), only where the axis' spacing `s` (in fine spacings) is less than twice the smallest
+/// spacing of the level. The coarse level has `n / f` nodes (rounded down) along each axis.
 fn factors(n: [usize; 3], s: [usize; 3], dim: usize) -> [usize; 3] {
     let smin = (0..dim).map(|a| s[a]).min().unwrap_or(1);
     std::array::from_fn(|a| {
         if a >= dim || s[a] >= 2 * smin || n[a] < 2 {
             1
-        } else if n[a].is_multiple_of(2) {
-            2
-        } else if n[a].is_multiple_of(3) {
+        } else if !n[a].is_multiple_of(2) && n[a].is_multiple_of(3) {
             3
         } else {
-            1
+            2
         }
     })
+}
+
+/// The fine nodes `[start, end)` of aggregate `c` along an axis of `n` fine nodes coarsened by
+/// `f` to `n / f` aggregates: `f` wide, the last one taking the remainder.
+#[inline(always)]
+fn block(c: usize, f: usize, n: usize) -> (usize, usize) {
+    let last = n / f - 1;
+    (c * f, if c == last { n } else { (c + 1) * f })
+}
+
+/// The aggregate of fine node `i` along an axis of `n` fine nodes coarsened by `f`.
+#[inline(always)]
+fn aggregate(i: usize, f: usize, n: usize) -> usize {
+    (i / f).min(n / f - 1)
 }
 
 /// The node counts of the levels of `grid`'s hierarchy, finest first, with each level's
@@ -211,23 +230,23 @@ fn inverse_diagonal(lv: &mut Level) {
 }
 
 /// The coarse level's face coefficients from the fine level's: the sum of the fine
-/// coefficients crossing each coarse face, divided by the coarsening factor along it.
+/// coefficients crossing each coarse face, divided by the distance between the centres of the
+/// two aggregates it separates (in fine spacings; f between uniform aggregates).
 fn coarsen(fine: &Level, out: &mut [Weights]) {
     let (g, f) = (&fine.grid, fine.f);
-    let cn: [usize; 3] = std::array::from_fn(|a| g.n[a] / f[a]);
+    let n = g.n;
+    let cn: [usize; 3] = std::array::from_fn(|a| n[a] / f[a]);
     let dim = g.dim;
     out.par_chunks_mut(cn[0]).enumerate().for_each(|(crow, o)| {
         let (cj, ck) = (crow % cn[1], crow / cn[1]);
         for (ci, o) in o.iter_mut().enumerate() {
             let c = [ci, cj, ck];
+            // The block's fine nodes along each axis.
+            let blocks: [(usize, usize); 3] = std::array::from_fn(|b| block(c[b], f[b], n[b]));
             for a in 0..dim {
                 // The fine nodes of the block's last layer along a.
-                let mut lo = [0; 3];
-                let mut hi = [0; 3];
-                for b in 0..3 {
-                    lo[b] = c[b] * f[b];
-                    hi[b] = lo[b] + f[b];
-                }
+                let mut lo = blocks.map(|r| r.0);
+                let hi = blocks.map(|r| r.1);
                 lo[a] = hi[a] - 1;
                 let mut s = 0.0;
                 for k in lo[2]..hi[2] {
@@ -237,7 +256,9 @@ fn coarsen(fine: &Level, out: &mut [Weights]) {
                         }
                     }
                 }
-                o[a] = s / f[a] as f64;
+                let next = block((c[a] + 1) % cn[a], f[a], n[a]);
+                let width = (hi[a] - blocks[a].0) + (next.1 - next.0);
+                o[a] = 2.0 * s / width as f64;
             }
         }
     });
@@ -380,8 +401,9 @@ fn restrict_residual(lv: &mut Level, x: &[f64], b: &[f64]) {
         .for_each(|(crow, o)| {
             o.fill(0.0);
             let (cj, ck) = (crow % cn[1], crow / cn[1]);
-            for k in ck * f[2]..(ck + 1) * f[2] {
-                for j in cj * f[1]..(cj + 1) * f[1] {
+            let ((j0, j1), (k0, k1)) = (block(cj, f[1], g.n[1]), block(ck, f[2], g.n[2]));
+            for k in k0..k1 {
+                for j in j0..j1 {
                     let rn = RowNeighbours::new(g, j + g.n[1] * k);
                     let (c0, [ym, zm], [yp, zp]) = (rn.c0, rn.below, rn.above);
                     let row = |at: usize| &x[at..at + nx];
@@ -390,7 +412,6 @@ fn restrict_residual(lv: &mut Level, x: &[f64], b: &[f64]) {
                     let (wc, wym) = (&w[c0..c0 + nx], &w[ym..ym + nx]);
                     let wzm = if three { &w[zm..zm + nx] } else { wc };
                     let bc = &b[c0..c0 + nx];
-                    let (mut ci, mut count) = (0, 0);
                     for i in 0..nx {
                         let im = if i == 0 { nx - 1 } else { i - 1 };
                         let ip = if i + 1 == nx { 0 } else { i + 1 };
@@ -400,12 +421,7 @@ fn restrict_residual(lv: &mut Level, x: &[f64], b: &[f64]) {
                         if three {
                             ax += wi[2] * (xc[i] - xzp[i]) + wzm[i][2] * (xc[i] - xzm[i]);
                         }
-                        o[ci] += bc[i] - ax;
-                        count += 1;
-                        if count == f[0] {
-                            count = 0;
-                            ci += 1;
-                        }
+                        o[aggregate(i, f[0], nx)] += bc[i] - ax;
                     }
                 }
             }
@@ -421,9 +437,9 @@ fn prolong(lv: &Level, x: &mut [f64]) {
     let xc = &lv.coarse_x;
     x.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
         let (j, k) = (row % ny, row / ny);
-        let c0 = cn[0] * (j / f[1] + cn[1] * (k / f[2]));
+        let c0 = cn[0] * (aggregate(j, f[1], ny) + cn[1] * aggregate(k, f[2], g.n[2]));
         for (i, o) in o.iter_mut().enumerate() {
-            *o += xc[c0 + i / f[0]];
+            *o += xc[c0 + aggregate(i, f[0], nx)];
         }
     });
 }
