@@ -31,7 +31,7 @@ pub const CASE: Case = Case {
     description: "a sphere of density 1.2 falling through water (nu = 1e-4 cgs, Re about 1.4e4, cell Reynolds number about 1000) with the default numerics: it runs to the end, rests on the floor of a closed box, the fluid's energy never grows once it rests, and the grid-scale dissipation removes the same energy per unit time at any step",
     reference: "energy balance of a flow with no driving (dE/dt <= 0 once the body rests); the dissipation's rate per unit time (issue 32); the standard drag curve (Clift & Gauvin 1970) for the open box, printed only",
     full: "closed box at 64^3 and 96^3 to t = 0.6, the dissipation at 1/2 and 1/4 of the step, the open periodic box 64x64x128 to t = 0.3",
-    quick: "closed box at 64^3 to t = 0.6, the dissipation at 1/2 and 1/4 of the step",
+    quick: "closed box at 64^3 to t = 0.6, the dissipation at 1/2 of the step",
     full_time: RunTime::Minutes,
     quick_time: RunTime::Minutes,
     run: high_re_sphere,
@@ -50,7 +50,7 @@ pub const CASE: Case = Case {
         },
         KnownFailure {
             row: "64^3: energy removed by the grid-scale dissipation by t = 0.1 at 0.25 of the step",
-            quick: true,
+            quick: false,
             full: true,
             why: "+21.2% (7.271e-3 against 5.998e-3; +20.9% in the build before; +11.3% at half the step) since the no-slip of systems/noslip.rs holds the sphere's inside rigid at the end of each step: its forcing on the staircase of nodes inside the surface puts grid-scale content into the flow, and the dissipation removes 6.02e-3 by t = 0.1 against 2.19e-3 without it (+19.4% and +4.8% then). The dissipation is a rate per unit time, exactly (tests/suite/spectral.rs), but the state it acts on is not: the M'4 remesh, the method's other sink at the grid scale, damps a mode by O(delta^2) per step, so over a fixed time by O(dt), and at a smaller step more energy reaches the grid scale and the dissipation removes more. Taylor-Green at 64^3 shows the same: removed by t = 5 2.79e-4, 3.61e-4, 4.51e-4 at c = 0.5, 0.25, 0.125 (a per-step filter would remove 2 and 4 times as much); issues 32 and 35",
         },
@@ -240,7 +240,9 @@ pub fn high_re_sphere(quick: bool) -> anyhow::Result<Report> {
         ));
         if n == 64 {
             let base = tr.removed_at(COMPARE_END);
-            let scales: &[f64] = &[0.5, 0.25];
+            // The quick tier keeps the half step (its row fails as the quarter's does); the
+            // quarter step's run alone is 40% of the case's time.
+            let scales: &[f64] = if quick { &[0.5] } else { &[0.5, 0.25] };
             for &s in scales {
                 let tr_s = run(true, n, s, COMPARE_END)?;
                 let what = format!(
@@ -272,7 +274,7 @@ pub fn high_re_sphere(quick: bool) -> anyhow::Result<Report> {
         ));
     } else {
         rep.notes.push(
-            "quick: the closed box at 64^3 with the comparison at 1/2 and 1/4 of the step; the full case adds 96^3 and the open box"
+            "quick: the closed box at 64^3 with the comparison at 1/2 of the step; the full case adds 96^3, the comparison at 1/4 of the step and the open box"
                 .into(),
         );
     }
