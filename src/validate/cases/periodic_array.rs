@@ -53,6 +53,10 @@ pub const CASE: Case = Case {
     }],
 };
 
+/// What [`settle`] returns: (time, box lengths travelled) after every step, the first
+/// sphere's crossings of the bottom face, the largest velocity difference of the spheres.
+type Settled = (Vec<(f64, f64)>, usize, f64);
+
 /// The spheres of radius `a` and density `rho` at `centres` (fractions of the box), settling
 /// from rest in a periodic cubic box of side `side` of fluid (ρ_F = 1, ν = 1) on `n`³ nodes
 /// under gravity `g`, at diffusion number `d`, until they have travelled `distance` box
@@ -70,7 +74,7 @@ fn settle(
     g: f64,
     d: f64,
     distance: f64,
-) -> anyhow::Result<(Vec<(f64, f64)>, usize, f64)> {
+) -> anyhow::Result<Settled> {
     let bodies: Vec<String> = centres
         .iter()
         .enumerate()
