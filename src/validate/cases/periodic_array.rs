@@ -147,6 +147,15 @@ fn traversal_means(curve: &[(f64, f64)]) -> Vec<f64> {
         .collect()
 }
 
+/// The traversals' mean velocities over `u_h`, for the notes.
+fn by_traversal(means: &[f64], u_h: f64) -> String {
+    means
+        .iter()
+        .map(|m| format!("{:.4}", m / u_h))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 fn periodic_array(quick: bool) -> anyhow::Result<Report> {
     let mut rep = Report::new("periodic-array");
     let (a, mu, rho) = (0.2f64, 1.0, 2.0);
@@ -198,11 +207,7 @@ fn periodic_array(quick: bool) -> anyhow::Result<Report> {
              face in {} steps ({:.1} s); mean U / U_Hasimoto by traversal: {}",
             curve.len(),
             start.elapsed().as_secs_f64(),
-            means
-                .iter()
-                .map(|m| format!("{:.4}", m / u_h))
-                .collect::<Vec<_>>()
-                .join(", ")
+            by_traversal(&means, u_h)
         ));
     }
     if !quick {
@@ -263,11 +268,7 @@ fn bcc(rep: &mut Report, a: f64, rho: f64, mu: f64) -> anyhow::Result<()> {
          steps ({:.1} s); mean U / U_Hasimoto by traversal: {}",
         curve.len(),
         start.elapsed().as_secs_f64(),
-        means
-            .iter()
-            .map(|m| format!("{:.4}", m / u_h))
-            .collect::<Vec<_>>()
-            .join(", ")
+        by_traversal(&means, u_h)
     ));
     Ok(())
 }
