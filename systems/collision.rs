@@ -41,9 +41,10 @@
 //!
 //! The box is periodic: two moving bodies near each other across its boundary touch through
 //! their periodic images. A body whose grown box reaches past the box's boundary is also
-//! tested against every other bounded body's nearest image (the pair then carries the whole
-//! box lengths `shift` by which the source body is moved to that image, in the narrow phase
-//! and in the pair's lever arms); bodies wholly inside the box, and every pair the sweep
+//! tested against every periodic image of every other bounded body within reach (each such
+//! pair carries the whole box lengths `shift` by which the source body is moved to that
+//! image, in the narrow phase and in the pair's lever arms): two bodies half a box apart
+//! touch through two images at once; bodies wholly inside the box, and every pair the sweep
 //! finds directly, are treated as before. Pairs are
 //! evaluated in parallel and added in a fixed order, so results do not depend on the thread
 //! count.
@@ -342,11 +343,14 @@ fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodi
             }
         }
     }
-    // Across the periodic boundary: a box reaching past it against the other bodies' nearest
-    // images (each unordered pair once; a pair the sweep found directly is not repeated).
+    // Across the periodic boundary: a box reaching past it against every periodic image of
+    // the other bodies within reach (each unordered pair and image once; the pairs the sweep
+    // found directly are the zero shift). Two bodies half a box apart meet through two images
+    // at once, whose forces cancel; the nearest image alone pushed them apart.
     let ext = grid.extent();
     let (o, dim) = (grid.origin, grid.dim);
     let past = |b: &Aabb| (0..dim).any(|a| b.mins[a] < o[a] || b.maxs[a] >= o[a] + ext[a]);
+    let images = if dim == 3 { 27 } else { 9 };
     for &x in &c.order {
         let ax = boxes[x].aabb.unwrap();
         if !past(&ax) {
@@ -357,17 +361,27 @@ fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodi
                 continue;
             }
             let d = boxes[y].center - boxes[x].center;
-            let shift = DVec3::from_array(grid.image_shift(d.to_array()));
-            if shift == DVec3::ZERO {
-                continue;
-            }
-            let ay = boxes[y].aabb.unwrap();
-            let sh = PVec::new(shift.x, shift.y, shift.z);
-            let ay = Aabb::new(ay.mins + sh, ay.maxs + sh);
             let reach = boxes[x].radius + boxes[y].radius + cut;
-            if ax.intersects(&ay) && (d + shift).length_squared() <= reach * reach {
-                push(&mut c.pairs, x, y, shift);
-                push(&mut c.pairs, y, x, -shift);
+            let ay0 = boxes[y].aabb.unwrap();
+            for m in 0..images {
+                let shift = DVec3::new(
+                    ((m % 3) as f64 - 1.0) * ext[0],
+                    ((m / 3 % 3) as f64 - 1.0) * ext[1],
+                    if dim == 3 {
+                        ((m / 9) as f64 - 1.0) * ext[2]
+                    } else {
+                        0.0
+                    },
+                );
+                if shift == DVec3::ZERO {
+                    continue;
+                }
+                let sh = PVec::new(shift.x, shift.y, shift.z);
+                let ay = Aabb::new(ay0.mins + sh, ay0.maxs + sh);
+                if ax.intersects(&ay) && (d + shift).length_squared() <= reach * reach {
+                    push(&mut c.pairs, x, y, shift);
+                    push(&mut c.pairs, y, x, -shift);
+                }
             }
         }
     }
@@ -389,10 +403,19 @@ fn broad_phase(grid: &Grid, cp: &ContactParams, cut: f64, c: &mut Contacts, bodi
             }
         }
     }
-    // A fixed order: by unordered pair, then receiver.
-    c.pairs.sort_unstable_by_key(|&(r, s, _, _)| {
+    // A fixed order: by unordered pair, then image (the shift seen from the lower id, in
+    // whole box lengths), then receiver: the two directions of one image are adjacent.
+    c.pairs.sort_unstable_by_key(|&(r, s, _, shift)| {
         let (a, b) = (boxes[r].id, boxes[s].id);
-        (a.min(b), a.max(b), a)
+        let seen = if a < b { shift } else { -shift };
+        let lengths: [i64; 3] = std::array::from_fn(|q| {
+            if q < dim {
+                (seen[q] / ext[q]).round() as i64
+            } else {
+                0
+            }
+        });
+        (a.min(b), a.max(b), lengths, a)
     });
 }
 
@@ -474,11 +497,16 @@ fn one_potential_per_dynamic_pair(c: &mut Contacts, bodies: &BodyQuery) {
     // T_i = (T_ij - T_ji - (x_j - x_i) × F_ji)/2 about the centroids (by translation
     // invariance, -∇_i U_ji is the reaction of F_ji and -∂U_ji/∂θ_i its moment about x_i),
     // which conserves momentum, angular momentum and energy exactly.
-    for k in 0..c.pairs.len().saturating_sub(1) {
-        let ((r, s, _, shift), (r2, s2, _, _)) = (c.pairs[k], c.pairs[k + 1]);
-        if r2 != s || s2 != r || !boxes[s].dynamic {
+    // The two directions of one image are adjacent (`broad_phase`); a pair of bodies may
+    // meet through several images, one after the other.
+    let mut k = 0;
+    while k + 1 < c.pairs.len() {
+        let ((r, s, _, shift), (r2, s2, _, shift2)) = (c.pairs[k], c.pairs[k + 1]);
+        if r2 != s || s2 != r || shift2 != -shift || !boxes[s].dynamic {
+            k += 1;
             continue;
         }
+        let next = k + 2;
         if let Some((f, t, potential)) = c.results[k].partner {
             let (any, gap) = (c.results[k].any, c.results[k].gap);
             c.results[k + 1] = PairResult {
@@ -489,9 +517,11 @@ fn one_potential_per_dynamic_pair(c: &mut Contacts, bodies: &BodyQuery) {
                 any,
                 partner: None,
             };
+            k = next;
             continue;
         }
         let (Ok(bi), Ok(bj)) = (bodies.get(boxes[r].entity), bodies.get(boxes[s].entity)) else {
+            k = next;
             continue;
         };
         let arm = bj.2.centroid + shift - bi.2.centroid;
@@ -508,6 +538,7 @@ fn one_potential_per_dynamic_pair(c: &mut Contacts, bodies: &BodyQuery) {
             out.any = any;
             out.gap = gap;
         }
+        k = next;
     }
 }
 

@@ -329,3 +329,47 @@ fn bodies_overlapping_across_the_boundary_are_rejected() {
     // 0.25 apart through the boundary: fine.
     Scene::parse(&text.replace("0.95", "0.8"), "ok.ron", "ok").unwrap();
 }
+
+#[test]
+fn bodies_half_a_box_apart_touch_through_both_images() {
+    // Two disks half a box apart along x (0.25 in a box of 0.5, gap 0.05, within the contact
+    // range of 6 cells) meet through two images at once: b on a's right, and b's image on
+    // a's left. The contact on a must be the sum of the two one-sided contacts, measured with
+    // the same disks in a box twice as long (the other image out of reach), at the same
+    // offsets against the nodes. Counting the nearest image alone gives one of them.
+    let force_on_a = |extent: f64, a: f64, b: f64| {
+        let n = (extent * 64.0).round() as usize;
+        let mut s = sim(&format!(
+            r#"Scene(
+            domain: (extent: [{extent}, 0.5], cells: [{n}, 32]),
+            vacuum: true,
+            numerics: (dt: Fixed(0.0005), end_time: 1.0),
+            contact: (kappa: 5.0),
+            bodies: [
+                (name: "a", shape: Disk(radius: 0.1), density: 1.0, position: [{a}, 0.25]),
+                (name: "b", shape: Disk(radius: 0.1), density: 1.0, position: [{b}, 0.25]),
+            ],
+        )"#
+        ));
+        s.step().unwrap();
+        let mut q = s.world.query::<(&Body, &tumble::bodies::ContactState)>();
+        q.iter(&s.world)
+            .find(|(body, _)| body.name == "a")
+            .map(|(_, c)| c.force)
+            .unwrap()
+    };
+    let right = force_on_a(1.0, 0.375, 0.625);
+    let left = force_on_a(1.0, 0.375, 0.125);
+    let both = force_on_a(0.5, 0.125, 0.375);
+    eprintln!("right {right:?}, left {left:?}, both {both:?}");
+    assert!(
+        right.x < 0.0 && left.x > 0.0,
+        "no contact: {right:?} {left:?}"
+    );
+    let err = (both - (right + left)).length();
+    assert!(
+        err <= 1e-9 * right.length(),
+        "both images {both:?} against {:?}",
+        right + left
+    );
+}
