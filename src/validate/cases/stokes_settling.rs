@@ -35,24 +35,12 @@ pub const CASE: Case = Case {
 
 /// Velocity along gravity of a sphere of radius 0.1 and density `rho` settling in a periodic
 /// unit box of fluid (ρ_F = 1, ν = 1) on `n`³ nodes under gravity of magnitude `g`, with the
-/// adaptive step at diffusion number `d` and the coupling `coupling` (a line of `numerics`).
+/// adaptive step at diffusion number `d` and the coupling `coupling` (a line of `numerics`),
+/// its centre off the node at the box's centre by `offset` grid spacings along each axis.
 /// Returns (t, U) after every step to `t_end`, U > 0 when the body moves the way its excess
 /// weight pulls it (down if heavier than the fluid, up if lighter); the error of the run if it
 /// fails (a blow-up).
 fn periodic_settling(
-    n: usize,
-    rho: f64,
-    g: f64,
-    d: f64,
-    coupling: &str,
-    t_end: f64,
-) -> anyhow::Result<Vec<(f64, f64)>> {
-    periodic_settling_at(n, rho, g, d, coupling, t_end, [0.0; 3])
-}
-
-/// [`periodic_settling`] with the sphere's centre moved off the node at the box's centre by
-/// `offset` grid spacings along each axis.
-fn periodic_settling_at(
     n: usize,
     rho: f64,
     g: f64,
@@ -144,7 +132,7 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
                 "h = 1/{n} ({:.1} cells per radius), density {rho}: U / U_Hasimoto",
                 a * n as f64
             );
-            match periodic_settling(n, rho, g, 0.5, MODEL, t_end) {
+            match periodic_settling(n, rho, g, 0.5, MODEL, t_end, [0.0; 3]) {
                 Ok(curve) => {
                     let u = steady_value(&curve, s);
                     if n == 32 && rho == 2.0 {
@@ -168,9 +156,10 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
     // The drag must not depend on where the surface cuts the grid (full tier): density 2 with
     // the centre off the nodes by three fixed offsets (in grid spacings; the centred sphere
     // is the row above), at both grids.
+    // Density 2's relaxation time and the case's sampling interval for it.
+    let tau2 = 5.0 * a * a / (9.0 * mu);
+    let s2 = (0.5 * tau2).max(0.01);
     if !quick {
-        let tau = 5.0 * a * a / (9.0 * mu);
-        let s = (0.5 * tau).max(0.01);
         for &n in grids {
             let mut line = Vec::new();
             for off in [[0.37, 0.21, 0.5], [0.5, 0.5, 0.5], [0.13, 0.71, 0.29]] {
@@ -181,8 +170,8 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
                     off[1],
                     off[2]
                 );
-                let curve = periodic_settling_at(n, 2.0, g0, 0.5, MODEL, t0 + 2.0 * s, off)?;
-                let u = steady_value(&curve, s) / u_h;
+                let curve = periodic_settling(n, 2.0, g0, 0.5, MODEL, t0 + 2.0 * s2, off)?;
+                let u = steady_value(&curve, s2) / u_h;
                 line.push(format!("{u:.4}"));
                 rep.rows.push(Row::rel(row, 1.0, u, 0.02));
             }
@@ -195,16 +184,14 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
     // The drag must not depend on the time step: density 2 at diffusion numbers 0.125, 0.5
     // and 2 (Δt = d h²/ν), h = 1/32.
     let n = 32;
-    let tau = 5.0 * a * a / (9.0 * mu);
     let mut us = Vec::new();
     for d in [0.125, 0.5, 2.0] {
         if let (0.5, Some(r)) = (d, rho2) {
             us.push((d, r));
             continue;
         }
-        let s = (0.5 * tau).max(0.01);
-        let curve = periodic_settling(n, 2.0, g0, d, MODEL, t0 + 2.0 * s)?;
-        us.push((d, steady_value(&curve, s) / u_h));
+        let curve = periodic_settling(n, 2.0, g0, d, MODEL, t0 + 2.0 * s2, [0.0; 3])?;
+        us.push((d, steady_value(&curve, s2) / u_h));
     }
     let (lo, hi) = us.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &(_, r)| {
         (l.min(r), h.max(r))
