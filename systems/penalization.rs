@@ -27,15 +27,17 @@
 //! 1.51, even with the body's extra mass moved into the mask), so the rigid region of a body
 //! that stays with the projection is the whole smoothed band, the same χ as its density and
 //! mass. A body that moves by Newton-Euler is set to its rigid velocity exactly on the nodes
-//! inside its surface (φ > 0), the region its mean and its no-slip use
-//! (`systems/noslip.rs`), with its mass from its exact volume.
+//! inside its surface (φ > 0) on the first step only (its initial condition); from then on the
+//! flow inside it is fluid held by the no-slip at its surface markers (`systems/noslip.rs`),
+//! and takes here only the contact's velocity change, which acts on the whole body.
 
 use crate::base::fields::{Fields, Params, SimTime};
 use crate::base::grid::{Grid, component_ptrs};
 use crate::base::params::BodyCoupling;
+use crate::bodies::contact::contact_velocity_change;
 use crate::bodies::coupling::MotionLaw;
 use crate::bodies::integrals::{BodySums, rigid_region};
-use crate::bodies::{Body, BodyFields, GridPatch, Hydro, RigidState};
+use crate::bodies::{Body, BodyFields, ContactState, GridPatch, Hydro, Material, RigidState};
 use crate::solvers::operators::curl_add;
 use bevy_ecs::prelude::*;
 use glam::DVec3;
@@ -50,7 +52,15 @@ pub fn penalization(
     mut fields: ResMut<Fields>,
     mut bf: ResMut<BodyFields>,
     mut sums: ResMut<BodySums>,
-    mut bodies: Query<(&Body, &GridPatch, &RigidState, &MotionLaw, &mut Hydro)>,
+    mut bodies: Query<(
+        &Body,
+        &GridPatch,
+        &RigidState,
+        &MotionLaw,
+        &Material,
+        &ContactState,
+        &mut Hydro,
+    )>,
 ) {
     let dt = time.dt;
     let ldt = params.numerics.lambda * dt;
@@ -73,7 +83,7 @@ pub fn penalization(
     // Moving bodies first, static ones last: where a body overlaps a wall, the wall wins and
     // the fluid there is at rest, which is what stops a body at a wall.
     for pass_static in [false, true] {
-        for (body, patch, state, law, mut hydro) in &mut bodies {
+        for (body, patch, state, law, mat, contact, mut hydro) in &mut bodies {
             if body.is_static() != pass_static {
                 continue;
             }
@@ -81,6 +91,18 @@ pub fn penalization(
             // A Newton-Euler body's rigid region is the nodes inside its surface, set to its
             // rigid velocity exactly (the weight of its mean and its no-slip).
             let newton = dynamic && pressure && *law == MotionLaw::NewtonEuler;
+            // After the first step the flow inside a Newton-Euler body is fluid, held by the
+            // no-slip at its markers (`noslip`); it takes only the contact's velocity change
+            // here (the contact acts on the whole body, this fluid included).
+            let kick = if newton && fields.dt_prev > 0.0 {
+                let (dv, dw) = contact_velocity_change(dim, mat.density, state, contact, dt);
+                if dv == DVec3::ZERO && dw == DVec3::ZERO {
+                    continue;
+                }
+                Some((dv, dw))
+            } else {
+                None
+            };
             // With the momentum coupling a dynamic body's force is the fluid's share of its
             // momentum balance, reported by `rigid_velocity`.
             let own_force = !(dynamic && (momentum || pressure));
@@ -123,7 +145,9 @@ pub fn penalization(
                             // SAFETY: distinct patch nodes map to distinct grid nodes.
                             unsafe {
                                 let old = u[q].read(g);
-                                let new = if newton {
+                                let new = if let Some((dv, dw)) = kick {
+                                    old + (dv + dw.cross(rv))[q]
+                                } else if newton {
                                     ubar[q]
                                 } else {
                                     (old + ldt * chi * ubar[q]) / (1.0 + ldt * chi)

@@ -251,24 +251,20 @@ pub fn rigid_velocity(
                 state.angular_velocity += solve_inertia(grid.dim, j_body, torque_impulse);
                 continue;
             }
-            let dt = fields.dt_prev;
-            let p_fluid = mom - m_w * v_prev;
+            // The flow inside is fluid, held by the no-slip at the markers, which also gives
+            // the body the fluid's force (its recoil, `noslip`): here the body's mass beyond
+            // that fluid takes its weight less buoyancy, with the virtual mass's lag.
+            let m_e = e + m_v;
+            let j_e = (e_rho + v_rho) * state.inertia;
             let lag = m_v * last.acceleration * time.dt;
-            state.velocity = v_prev + (p_fluid + weight + lag) / (m_w + e + m_v);
-            let l_fluid = ang - wj * w_prev;
+            state.velocity = v_prev + (weight + lag) / m_e;
             let spin_lag = v_rho * (j_old * (w_prev + last.angular_acceleration * time.dt));
             state.angular_velocity = solve_inertia(
                 grid.dim,
-                j_body,
-                ang + e_rho * (j_old * w_prev) + spin_lag + torque_impulse,
+                j_e,
+                e_rho * (j_old * w_prev) + spin_lag + torque_impulse,
             );
-            // The flow's impulse on the rigid region per unit time: the scale of the no-slip's
-            // stop test (`noslip`); the force reported is set from the motion by
-            // `rigid_update`.
-            *hydro = Hydro {
-                force: p_fluid / dt,
-                torque: l_fluid / dt,
-            };
+            *hydro = Hydro::default();
             continue;
         }
         // The same moment on the rigid region's inertia (wj: its mass there, as wvol above).

@@ -45,19 +45,19 @@ pub enum MotionLaw {
     /// density, +6.5% at 0.01). Taken with a free surface and for unbounded shapes.
     #[default]
     Projected,
-    /// Newton-Euler with the body's own mass: the projection sees fluid of the phases'
-    /// density inside the body, and the body's mass beyond the fluid it displaces takes the
-    /// fluid's impulse on its rigid region and its own weight less buoyancy,
-    /// (M_w + E + M_v) (V^{n+1} - V^n) = M_w (ũ - V^n) + E g Δt + M_v a^n Δt, with the
-    /// virtual mass M_v ([`VirtualMass`]) that makes it stable at any density; the no-slip
-    /// (`systems/noslip.rs`) then holds the flow to the body with its recoil.
+    /// Newton-Euler with the body's own mass: the flow fills the body as fluid of the
+    /// phases' density, held to the body by the no-slip at its surface markers
+    /// (`systems/noslip.rs`), and the body's mass beyond that fluid, E, takes its weight less
+    /// buoyancy, (E + M_v) (V^{n+1} - V^n) = E g Δt + M_v a^n Δt, and the markers' recoil
+    /// within the no-slip's solve, with the virtual mass M_v ([`VirtualMass`]) that keeps
+    /// that solve positive definite for a body lighter than the fluid.
     NewtonEuler,
 }
 
 /// How a dynamic body of density `density` moves in a fluid of density `rho_fluid` when the
 /// no-slip runs (`body_coupling: Pressure` without a free surface), decided once when it is
 /// made: by Newton-Euler with its own mass and the virtual mass [`VirtualMass`] its density
-/// and shape need, whatever the density; `Projected` for an unbounded shape. `exact_volume` is
+/// needs, whatever the density; `Projected` for an unbounded shape. `exact_volume` is
 /// the shape's exact volume (0 when it has none: the volume sampled at half the grid spacing
 /// `h` is taken).
 pub fn newton_euler(
@@ -69,17 +69,15 @@ pub fn newton_euler(
     exact_volume: f64,
 ) -> (MotionLaw, VirtualMass) {
     match added_mass_bound(level_set, h, dim) {
-        Some((sampled, added)) => {
+        Some((sampled, _)) => {
             let volume = if exact_volume > 0.0 {
                 exact_volume
             } else {
                 sampled
             };
-            // The bound scales with the volume (it is per unit of the sampled one).
-            let added = added * volume / sampled;
             (
                 MotionLaw::NewtonEuler,
-                VirtualMass::new(volume, added, density, rho_fluid),
+                VirtualMass::new(volume, density, rho_fluid),
             )
         }
         None => (MotionLaw::Projected, VirtualMass::default()),
@@ -151,15 +149,13 @@ pub fn added_mass_bound(
 /// (`systems/noslip.rs`), and its inertia with it: Schwarz, Kempe & Fröhlich (J. Comput.
 /// Phys. 281, 2015) add M_v dV/dt to both sides of the body's momentum balance, implicit on
 /// the left and extrapolated from the last step on the right,
-///   (m + M_v) (V^{n+1} - V^n) / Δt = F + M_v (V^n - V^{n-1}) / Δt_{n-1},
-/// which leaves every steady motion as it was and makes the lagged added mass and the
-/// negative excess mass of a light body harmless: the excess mass E = m - ρ_F V the body's
-/// recoil divides by becomes E + M_v, and the explicit update's amplification
-/// m_a / (m + M_v). A transient converges geometrically, without oscillation, by the factor
-/// M_v / (m + m_a + M_v) per step (the fluid's added mass m_a is implicit in the no-slip).
-/// M_v is the least mass that keeps (m + M_v) at least twice the shape's largest added mass
-/// ([`added_mass_bound`]) and E + M_v at least [`VIRTUAL_FLOOR`] ρ_F V; zero for a body
-/// heavy enough for both (a sphere from 1.1 times the fluid's density).
+///   (E + M_v) (V^{n+1} - V^n) / Δt = F + M_v (V^n - V^{n-1}) / Δt_{n-1},
+/// which leaves every steady motion as it was. E = m - ρ_F V is the body's mass beyond the
+/// fluid inside it, which the no-slip's recoil divides by (the fluid inside and outside, its
+/// added mass included, is implicit in the no-slip's solve): for a body lighter than the fluid
+/// E is negative and the solve would not be positive definite. M_v is the least mass that
+/// keeps E + M_v at least [`VIRTUAL_FLOOR`] ρ_F V: zero for a body at least 1.1 times as
+/// dense as the fluid.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 pub struct VirtualMass {
     /// M_v, mass units.
@@ -173,14 +169,11 @@ pub struct VirtualMass {
 pub const VIRTUAL_FLOOR: f64 = 0.1;
 
 impl VirtualMass {
-    /// The virtual mass of a body of density `density` in a fluid of density `rho_fluid`,
-    /// from its shape's volume and added-mass bound ([`added_mass_bound`]).
-    pub fn new(volume: f64, added: f64, density: f64, rho_fluid: f64) -> Self {
-        let m = density * volume;
-        let e = m - rho_fluid * volume;
-        let mass = (2.0 * rho_fluid * added - m)
-            .max(VIRTUAL_FLOOR * rho_fluid * volume - e)
-            .max(0.0);
+    /// The virtual mass of a body of volume `volume` and density `density` in a fluid of
+    /// density `rho_fluid`.
+    pub fn new(volume: f64, density: f64, rho_fluid: f64) -> Self {
+        let e = (density - rho_fluid) * volume;
+        let mass = (VIRTUAL_FLOOR * rho_fluid * volume - e).max(0.0);
         VirtualMass {
             mass,
             per_volume: if volume > 0.0 { mass / volume } else { 0.0 },

@@ -9,6 +9,7 @@ pub mod coupling;
 pub mod free_surface;
 pub mod integrals;
 pub mod levelset;
+pub mod markers;
 pub mod meshgen;
 pub mod shapes;
 pub mod surface;

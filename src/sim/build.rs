@@ -60,6 +60,18 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             }
             _ => (MotionLaw::Projected, VirtualMass::default()),
         };
+        // A Newton-Euler body's no-slip is held at markers on its surface; a body too thin
+        // to carry any (under about 1.1 cells across) stays with the projection.
+        let markers = if law == MotionLaw::NewtonEuler {
+            crate::bodies::markers::Markers::new(&level_set, grid.h, grid.dim)
+        } else {
+            crate::bodies::markers::Markers::default()
+        };
+        let (law, virtual_mass) = if law == MotionLaw::NewtonEuler && markers.points.is_empty() {
+            (MotionLaw::Projected, VirtualMass::default())
+        } else {
+            (law, virtual_mass)
+        };
         let orientation = crate::bodies::rotation(&spec.rotation);
         let (velocity, angular_velocity) = match &spec.kind {
             BodyKind::Dynamic => (vec3(&spec.velocity), angular3(&spec.angular_velocity)),
@@ -120,6 +132,7 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             },
             contact_points,
             BodySurface(geom.surface(diagonal, grid.dim)),
+            markers,
         ));
     }
     Ok(scene.bodies.len())
