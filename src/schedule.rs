@@ -62,6 +62,9 @@ pub enum PhysicsSet {
     Baroclinic,
     /// Particle push, stretching and remeshing (eqs. 29-30).
     Transport,
+    /// The no-slip's forcing of the last step carried into this one, before the diffusion
+    /// (`systems/noslip.rs`).
+    CarriedForcing,
     /// Implicit diffusion.
     Diffusion,
     /// Velocity from vorticity (eq. 15).
@@ -85,7 +88,7 @@ pub enum PhysicsSet {
 
 impl PhysicsSet {
     /// Every set, in schedule order.
-    pub const ALL: [PhysicsSet; 18] = [
+    pub const ALL: [PhysicsSet; 19] = [
         PhysicsSet::First,
         PhysicsSet::LevelSets,
         PhysicsSet::PhaseDensity,
@@ -96,6 +99,7 @@ impl PhysicsSet {
         PhysicsSet::Pressure,
         PhysicsSet::Baroclinic,
         PhysicsSet::Transport,
+        PhysicsSet::CarriedForcing,
         PhysicsSet::Diffusion,
         PhysicsSet::Poisson,
         PhysicsSet::NoSlip,

@@ -79,6 +79,9 @@ pub struct NoSlip {
     /// Per body (by `Body::id`), the force each of its markers took last step: the next
     /// solve's first guess. Kept in a checkpoint.
     last: Vec<Vec<DVec3>>,
+    /// This step's carried forces at the markers, body after body (the last forces scaled
+    /// to this step's length), already in the flow and the bodies' velocities.
+    carried: Vec<DVec3>,
     /// Iterations of the last solve (0 when it did not run).
     pub iterations: usize,
 }
@@ -146,7 +149,13 @@ impl NoSlip {
             }
             total += count;
         }
-        for v in [&mut self.x, &mut self.r, &mut self.p, &mut self.ap] {
+        for v in [
+            &mut self.x,
+            &mut self.r,
+            &mut self.p,
+            &mut self.ap,
+            &mut self.carried,
+        ] {
             v.reserve(total.saturating_sub(v.len()));
         }
         self.nodes.reserve(total.saturating_sub(self.nodes.len()));
@@ -208,7 +217,7 @@ pub fn noslip(
             continue;
         };
         let start = ns.nodes.len();
-        for (&m, &f) in markers.points.iter().zip(last) {
+        for &m in &markers.points {
             let pos = state.center + state.orientation * m;
             let rv = pos - state.centroid;
             let ubar = state.velocity + state.angular_velocity.cross(rv);
@@ -216,8 +225,9 @@ pub fn noslip(
             let u = st.interpolate(&grid, &fields.u);
             ns.nodes.push((st, rv));
             ns.r.push(ubar - u);
-            ns.x.push(f);
+            ns.x.push(DVec3::ZERO);
         }
+        let _ = last;
         // E + M_v (`VirtualMass`): positive for every body.
         let e = (mat.density - rho_f) * volume.0 + virt.mass;
         let j_e = state.inertia * (e / state.volume.max(f64::MIN_POSITIVE));
@@ -244,36 +254,17 @@ pub fn noslip(
     ns.ap.resize(m, DVec3::ZERO);
     let rr_step = dot(&ns.r, &ns.r);
     let mut applied = false;
-    // The first guess: the last forces, scaled by least squares, x0 = s x_last with
-    // s = (b·A x_last)/|A x_last|²: never more slip than from zero.
-    if ns.x.iter().any(|x| *x != DVec3::ZERO) {
-        ns.p.clear();
-        ns.p.extend_from_slice(&ns.x);
-        apply(ns, &grid, &mut spectral, nu_dt, dv, rho_f);
-        let (ba, aa) = (dot(&ns.r, &ns.ap), dot(&ns.ap, &ns.ap));
-        let scale = if aa > 0.0 && ba > 0.0 { ba / aa } else { 0.0 };
-        if scale > 0.0 {
-            for l in 0..m {
-                ns.x[l] *= scale;
-                ns.r[l] -= scale * ns.ap[l];
-            }
-            for rec in ns.bodies.iter_mut() {
-                rec.force = rec.p_force * (scale * rho_f);
-                rec.torque = rec.p_torque * (scale * rho_f);
-            }
-            add_response(u, &ns.kp_grid, scale);
-            spectral.forcing_accumulate(scale);
-            applied = true;
-        } else {
-            ns.x.iter_mut().for_each(|x| *x = DVec3::ZERO);
-        }
-    } else {
-        ns.x.iter_mut().for_each(|x| *x = DVec3::ZERO);
-    }
     ns.p.clear();
     ns.p.extend_from_slice(&ns.r);
     let mut rr = dot(&ns.r, &ns.r);
-    let stop = SLIP_TOLERANCE * SLIP_TOLERANCE * rr_step;
+    // The slip the step would have made without the carried forcing is at least that
+    // forcing's size: the solve stops at SLIP_TOLERANCE of the larger of the two.
+    let carried: f64 = if ns.carried.len() == m {
+        dot(&ns.carried, &ns.carried)
+    } else {
+        0.0
+    };
+    let stop = SLIP_TOLERANCE * SLIP_TOLERANCE * rr_step.max(carried);
     for it in 0..MAX_ITERATIONS {
         if rr <= stop {
             break;
@@ -314,6 +305,20 @@ pub fn noslip(
             }
         });
     }
+    if std::env::var("TUMBLE_NOSLIP_DEBUG").is_ok() {
+        eprintln!(
+            "noslip: {} markers, {} iterations, slip left {:.3e} of the larger of the step's and the carried",
+            m,
+            ns.iterations,
+            (dot(&ns.r, &ns.r) / rr_step.max(carried).max(f64::MIN_POSITIVE)).sqrt()
+        );
+    }
+    // The next step carries this step's whole force: the carried part and the correction.
+    if ns.carried.len() == m {
+        for (x, c) in ns.x.iter_mut().zip(&ns.carried) {
+            *x += *c;
+        }
+    }
     for rec in &ns.bodies {
         let (lo, hi) = rec.range;
         ns.last[rec.id].copy_from_slice(&ns.x[lo..hi]);
@@ -331,6 +336,84 @@ pub fn noslip(
         // is set from its motion by `rigid_update`.)
         state.velocity -= rec.force * (rec.inv_e / rho_f);
         state.angular_velocity -= solve_inertia(dim, rec.j_e, rec.torque);
+    }
+}
+
+/// The last step's forces carried into this step (the carried forcing of SophT's virtual
+/// boundary forcing and of CubismUP's iterated penalization): spread at the markers' places
+/// now, scaled to this step's length, their centred curl added to the vorticity before the
+/// implicit diffusion (so the flow takes them through the diffusion's resolvent, as the
+/// solve's K does), and their reaction given to the bodies. The solve at the end of the step
+/// then only corrects them.
+#[allow(clippy::too_many_arguments)]
+pub fn carry(
+    grid: Res<Grid>,
+    params: Res<Params>,
+    time: Res<SimTime>,
+    mut fields: ResMut<Fields>,
+    mut ns: ResMut<NoSlip>,
+    mut bodies: NewtonBodies,
+) {
+    let ns = &mut *ns;
+    ns.carried.clear();
+    let dt_prev = fields.dt_prev;
+    if dt_prev <= 0.0 {
+        return;
+    }
+    let scale = time.dt / dt_prev;
+    let rho_f = params.rho_fluid;
+    let dim = grid.dim;
+    let dv = grid.cell_volume();
+    let mut any = false;
+    for (_, body, patch, mut state, law, mat, volume, virt, markers) in &mut bodies {
+        if !(*law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()) {
+            continue;
+        }
+        let Some(last) = ns
+            .last
+            .get(body.id)
+            .filter(|l| l.len() == markers.points.len())
+        else {
+            continue;
+        };
+        let (mut force, mut torque) = (DVec3::ZERO, DVec3::ZERO);
+        for (&m, &f) in markers.points.iter().zip(last) {
+            let f = f * scale;
+            let pos = state.center + state.orientation * m;
+            let rv = pos - state.centroid;
+            Stencil::at(&grid, pos).visit(&grid, |g, w| {
+                for (q, c) in ns.p_grid.iter_mut().enumerate() {
+                    c[g] += w * f[q];
+                }
+            });
+            ns.carried.push(f);
+            force += f * dv;
+            torque += rv.cross(f * dv);
+            any = true;
+        }
+        let e = (mat.density - rho_f) * volume.0 + virt.mass;
+        let j_e = state.inertia * (e / state.volume.max(f64::MIN_POSITIVE));
+        if e > 0.0 {
+            state.velocity -= force * (rho_f / e);
+            state.angular_velocity -= solve_inertia(dim, j_e, torque * rho_f);
+        }
+    }
+    if !any {
+        return;
+    }
+    crate::solvers::operators::curl_add(&grid, &ns.p_grid, fields.omega_mut());
+    for (_, body, patch, state, law, _, _, _, markers) in &bodies {
+        if !(*law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()) {
+            continue;
+        }
+        for &m in &markers.points {
+            let pos = state.center + state.orientation * m;
+            Stencil::at(&grid, pos).visit(&grid, |g, _| {
+                for c in ns.p_grid.iter_mut() {
+                    c[g] = 0.0;
+                }
+            });
+        }
     }
 }
 
@@ -423,6 +506,7 @@ impl crate::schedule::Plugin for NoSlipPlugin {
                 );
             },
         )?;
+        ctx.add_system(PhysicsSet::CarriedForcing, "noslip_carry", carry)?;
         ctx.add_system(PhysicsSet::NoSlip, "noslip", noslip)?;
         ctx.checkpoint_part::<NoSlip>("noslip", 2)?;
         Ok(())

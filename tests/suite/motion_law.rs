@@ -53,7 +53,10 @@ fn disk_takes_virtual_mass_below_its_floor() {
     for (density, expected) in [(0.1, 1.0), (1.05, 0.05), (1.5, 0.0)] {
         let (l, mv) = law(d(), 2, density);
         assert_eq!(l, MotionLaw::NewtonEuler);
-        assert!(close(mv, expected, 1e-9), "density {density}: M_v / A = {mv}");
+        assert!(
+            close(mv, expected, 1e-9),
+            "density {density}: M_v / A = {mv}"
+        );
     }
 }
 
@@ -164,7 +167,11 @@ mod no_slip {
                 let grid = sim.grid().clone();
                 let mut q = sim.world.query::<(&Markers, &RigidState)>();
                 let (markers, st) = q.iter(&sim.world).next().unwrap();
-                assert!(markers.points.len() > 50, "{} markers", markers.points.len());
+                assert!(
+                    markers.points.len() > 50,
+                    "{} markers",
+                    markers.points.len()
+                );
                 let (mean, top) = slip(&grid, sim.fields(), markers, st);
                 eprintln!(
                     "diffusion number {d}, step {step}: rms slip before {before:.3e}, after: mean {mean:.3e}, rms {top:.3e}"
