@@ -14,11 +14,15 @@
 //!
 //! Why the retraction: the kernel spreads the force over three cells, so a wall held at the
 //! surface itself acts as if the body were larger (Breugem, J. Comput. Phys. 231, 2012,
-//! retracts his markers by 0.3 h for the same reason). Measured on `periodic-array` at
-//! h = 1/16 the settling speed is linear in r (0.909 / 1.132 / 1.366 of Hasimoto at
-//! r = 0.4 / 0.8 / 1.2): r = 0.55 is where that line meets 1, and the spacing of one h is
-//! the closest the conjugate gradients of the no-slip tolerate (0.7 h apart the solve
-//! stalled at 1-3% of the slip: neighbouring markers' forces nearly cancel in the response).
+//! retracts his markers by 0.3 h for the same reason). The retraction that gives a settling
+//! sphere (3D) or disk (2D) in a periodic box Hasimoto's and Sangani & Acrivos's velocities
+//! falls from about 0.56 h at 3.2 cells per radius to 0.45-0.47 h at 9.6, the same function
+//! of h/R in 2D and 3D: r = 0.40 + 0.50 H h, H the mean of the principal curvatures (1/R on
+//! both), fits both (docs/numerics.md, "The no-slip at surface markers"); with it the sphere
+//! moves at 0.989-1.005 of Hasimoto's from 3.2 to 6.4 cells per radius and the disk at
+//! 0.990-1.000 from 3.2 to 9.6. The spacing of one h is the closest the conjugate gradients
+//! of the no-slip tolerate (0.7 h apart the solve stalled at 1-3% of the slip: neighbouring
+//! markers' forces nearly cancel in the response).
 
 use crate::base::grid::Grid;
 use crate::bodies::levelset::LocalLevelSet;
@@ -66,13 +70,12 @@ pub fn surface_markers(
     level_set: &LocalLevelSet,
     h: f64,
     dim: usize,
-    retraction: f64,
+    retraction: impl Fn(f64) -> f64,
     spacing: f64,
 ) -> Vec<DVec3> {
     let Some((lo, hi)) = level_set.bounds() else {
         return Vec::new();
     };
-    let target = retraction * h;
     let s = 0.25 * h;
     let n = |a: usize| {
         if a < dim {
@@ -107,6 +110,12 @@ pub fn surface_markers(
                     if dim == 3 { lo.z + k as f64 * s } else { 0.0 },
                 );
                 let phi = level_set.phi(p);
+                if !(-0.5 * s..=1.5 * h).contains(&phi) {
+                    continue;
+                }
+                // The surface's mean curvature (the mean of the principal curvatures) at the
+                // nearest surface point, and the retraction there.
+                let target = retraction(mean_curvature(level_set, p, h, dim) * h) * h;
                 if (phi - target).abs() > 0.5 * s {
                     continue;
                 }
@@ -147,8 +156,35 @@ pub fn surface_markers(
     kept
 }
 
-/// The markers' retraction into the body, in grid spacings (see the module doc).
-pub const RETRACTION: f64 = 0.55;
+/// The markers' retraction into the body, in grid spacings, on a flat wall (see the module
+/// doc).
+pub const RETRACTION: f64 = 0.40;
+
+/// The retraction's growth with the surface's mean curvature H (the mean of the principal
+/// curvatures): r = [`RETRACTION`] + [`RETRACTION_CURVATURE`] H h, H h clamped to ±0.5.
+pub const RETRACTION_CURVATURE: f64 = 0.50;
+
+/// H at the surface point nearest `p` (two Newton steps to φ = 0), from the Laplacian of φ
+/// with a step of h: for a signed distance, -Δφ / (d - 1) on the surface (1/R on a sphere and
+/// on a circle).
+fn mean_curvature(level_set: &LocalLevelSet, mut p: DVec3, h: f64, dim: usize) -> f64 {
+    for _ in 0..2 {
+        let (v, g) = level_set.phi_grad(p, 1e-3 * h, dim);
+        let g2 = g.length_squared();
+        if g2 <= 0.0 {
+            break;
+        }
+        p -= v / g2 * g;
+    }
+    let c = level_set.phi(p);
+    let mut lap = 0.0;
+    for a in 0..dim {
+        let mut e = DVec3::ZERO;
+        e[a] = h;
+        lap += (level_set.phi(p + e) - 2.0 * c + level_set.phi(p - e)) / (h * h);
+    }
+    -lap / (dim as f64 - 1.0)
+}
 
 /// The markers' spacing, in grid spacings.
 pub const SPACING: f64 = 1.0;
@@ -165,8 +201,13 @@ impl Markers {
     /// The markers of a body whose reference level set is `level_set` on a grid of spacing
     /// `h` ([`RETRACTION`], [`SPACING`]).
     pub fn new(level_set: &LocalLevelSet, h: f64, dim: usize) -> Self {
+        // Experiment: TUMBLE_RETRACTION sets a constant retraction (not for main).
+        let fixed: Option<f64> = std::env::var("TUMBLE_RETRACTION")
+            .ok()
+            .and_then(|v| v.parse().ok());
+        let r = |hh: f64| fixed.unwrap_or(RETRACTION + RETRACTION_CURVATURE * hh.clamp(-0.5, 0.5));
         Markers {
-            points: surface_markers(level_set, h, dim, RETRACTION, SPACING * h),
+            points: surface_markers(level_set, h, dim, r, SPACING * h),
         }
     }
 }
