@@ -264,8 +264,17 @@ pub fn noslip(
     } else {
         0.0
     };
-    let stop = SLIP_TOLERANCE * SLIP_TOLERANCE * rr_step.max(carried);
-    for it in 0..MAX_ITERATIONS {
+    // Experiment: TUMBLE_NS_TOL and TUMBLE_NS_IT override the stop and the cap (not for main).
+    let tol: f64 = std::env::var("TUMBLE_NS_TOL")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(SLIP_TOLERANCE);
+    let max_it: usize = std::env::var("TUMBLE_NS_IT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(MAX_ITERATIONS);
+    let stop = tol * tol * rr_step.max(carried);
+    for it in 0..max_it {
         if rr <= stop {
             break;
         }
