@@ -6,11 +6,11 @@
 //! is then where the surface is, whatever the body's position against the grid (on the
 //! staircase of nodes inside the surface a settling sphere at 3.2 cells per radius moved at
 //! 0.974 to 1.007 of Hasimoto's velocity depending on its offset against the grid), and the
-//! markers, being material, carry the last step's force with the body to the next step's
-//! first guess however fast it moves. They lie on the level φ = r h inside the surface (φ > 0
-//! inside), r = [`RETRACTION`], about one grid spacing apart ([`SPACING`]); a marker's force
-//! is spread to the grid, and the velocity read at it, with Roma's three-point kernel, whose
-//! weights sum to one and whose first moment vanishes.
+//! markers, being material, carry the last step's force with the body into the next step
+//! however fast it moves. They lie on the level φ = r h inside the surface (φ > 0 inside),
+//! r = [`RETRACTION`] + [`RETRACTION_CURVATURE`] H h, [`SPACING`] grid spacings apart; a
+//! marker's force is spread to the grid, and the velocity read at it, with Roma's three-point
+//! kernel, whose weights sum to one and whose first moment vanishes.
 //!
 //! Why the retraction: the kernel spreads the force over three cells, so a wall held at the
 //! surface itself acts as if the body were larger (Breugem, J. Comput. Phys. 231, 2012,
@@ -20,9 +20,10 @@
 //! of h/R in 2D and 3D: r = 0.40 + 0.50 H h, H the mean of the principal curvatures (1/R on
 //! both), fits both (docs/numerics.md, "The no-slip at surface markers"); with it the sphere
 //! moves at 0.989-1.005 of Hasimoto's from 3.2 to 6.4 cells per radius and the disk at
-//! 0.990-1.000 from 3.2 to 9.6. The spacing of one h is the closest the conjugate gradients
-//! of the no-slip tolerate (0.7 h apart the solve stalled at 1-3% of the slip: neighbouring
-//! markers' forces nearly cancel in the response).
+//! 0.990-1.000 from 3.2 to 9.6 (calibrated with markers h apart). They are 1.5 h apart: the
+//! conjugate gradients of the no-slip converge much faster than with markers h apart
+//! (neighbouring markers' forces nearly cancel in the response; 0.7 h apart the solve stalled
+//! at 1-3% of the slip), and the settling speeds moved by less than 0.2%.
 
 use crate::base::grid::Grid;
 use crate::bodies::levelset::LocalLevelSet;
@@ -187,7 +188,7 @@ fn mean_curvature(level_set: &LocalLevelSet, mut p: DVec3, h: f64, dim: usize) -
 }
 
 /// The markers' spacing, in grid spacings.
-pub const SPACING: f64 = 1.0;
+pub const SPACING: f64 = 1.5;
 
 /// A Newton-Euler body's markers, in its frame (relative to `RigidState::center`, before
 /// the rotation `RigidState::orientation`), made once when the body is made.
@@ -201,11 +202,7 @@ impl Markers {
     /// The markers of a body whose reference level set is `level_set` on a grid of spacing
     /// `h` ([`RETRACTION`], [`SPACING`]).
     pub fn new(level_set: &LocalLevelSet, h: f64, dim: usize) -> Self {
-        // Experiment: TUMBLE_RETRACTION sets a constant retraction (not for main).
-        let fixed: Option<f64> = std::env::var("TUMBLE_RETRACTION")
-            .ok()
-            .and_then(|v| v.parse().ok());
-        let r = |hh: f64| fixed.unwrap_or(RETRACTION + RETRACTION_CURVATURE * hh.clamp(-0.5, 0.5));
+        let r = |hh: f64| RETRACTION + RETRACTION_CURVATURE * hh.clamp(-0.5, 0.5);
         Markers {
             points: surface_markers(level_set, h, dim, r, SPACING * h),
         }

@@ -176,10 +176,13 @@ mod no_slip {
                 eprintln!(
                     "diffusion number {d}, step {step}: rms slip before {before:.3e}, after: mean {mean:.3e}, rms {top:.3e}"
                 );
+                // The no-slip's tolerance: the slip left at most 0.5% of the body's speed
+                // (root mean square over the markers), and its mean, which moves the fluid
+                // inside the body against it, at most 0.1%.
                 assert!(mean <= 1e-3, "d {d} step {step}: mean slip {mean}");
                 assert!(
-                    top <= 1e-2 * before,
-                    "d {d} step {step}: {top} against {before} before"
+                    top <= 5e-3,
+                    "d {d} step {step}: rms slip {top} of the speed ({before} before)"
                 );
             }
         }

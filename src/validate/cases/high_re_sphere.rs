@@ -37,22 +37,16 @@ pub const CASE: Case = Case {
     run: high_re_sphere,
     known_failures: &[
         KnownFailure {
-            row: "64^3: largest relative growth of the fluid's kinetic energy once the sphere rests",
-            quick: true,
-            full: true,
-            why: "+1.6% (1% allowed; +3.9% to +5.5% in earlier builds of the same method, the value moving with round-off; 0 before the no-slip of systems/noslip.rs, +1.1% with its solve stopped at 8 iterations instead of 6): the sphere resting on the floor still takes the no-slip's reaction within the solve while the contact holds it, and an unconverged no-slip exchanges energy with the fluid; the 96^3 run not re-run; issue 35",
-        },
-        KnownFailure {
             row: "64^3: energy removed by the grid-scale dissipation by t = 0.1 at 0.5 of the step",
             quick: true,
             full: true,
-            why: "+11.3% (6.675e-3 against 5.998e-3; +11.1% in the build before; +4.8% before the no-slip of systems/noslip.rs): see the row at 0.25 of the step; issues 32 and 35",
+            why: "+20.0% (2.137e-2 against 1.780e-2) since the no-slip is held at surface markers (issue 45; +11.3%, 6.675e-3 against 5.998e-3, on the nodes inside the surface): the flow inside the body is fluid, and the markers' forcing, spread by the kernel, puts three times as much grid-scale content into the flow as the staircase did; see the row at 0.25 of the step; issues 32 and 45",
         },
         KnownFailure {
             row: "64^3: energy removed by the grid-scale dissipation by t = 0.1 at 0.25 of the step",
             quick: false,
             full: true,
-            why: "+21.2% (7.271e-3 against 5.998e-3; +20.9% in the build before; +11.3% at half the step) since the no-slip of systems/noslip.rs holds the sphere's inside rigid at the end of each step: its forcing on the staircase of nodes inside the surface puts grid-scale content into the flow, and the dissipation removes 6.02e-3 by t = 0.1 against 2.19e-3 without it (+19.4% and +4.8% then). The dissipation is a rate per unit time, exactly (tests/suite/spectral.rs), but the state it acts on is not: the M'4 remesh, the method's other sink at the grid scale, damps a mode by O(delta^2) per step, so over a fixed time by O(dt), and at a smaller step more energy reaches the grid scale and the dissipation removes more. Taylor-Green at 64^3 shows the same: removed by t = 5 2.79e-4, 3.61e-4, 4.51e-4 at c = 0.5, 0.25, 0.125 (a per-step filter would remove 2 and 4 times as much); issues 32 and 35",
+            why: "not re-run with the no-slip at surface markers (issue 45; +20.0% at half the step with them). +21.2% (7.271e-3 against 5.998e-3; +20.9% in the build before; +11.3% at half the step) since the no-slip of systems/noslip.rs holds the sphere's inside rigid at the end of each step: its forcing on the staircase of nodes inside the surface puts grid-scale content into the flow, and the dissipation removes 6.02e-3 by t = 0.1 against 2.19e-3 without it (+19.4% and +4.8% then). The dissipation is a rate per unit time, exactly (tests/suite/spectral.rs), but the state it acts on is not: the M'4 remesh, the method's other sink at the grid scale, damps a mode by O(delta^2) per step, so over a fixed time by O(dt), and at a smaller step more energy reaches the grid scale and the dissipation removes more. Taylor-Green at 64^3 shows the same: removed by t = 5 2.79e-4, 3.61e-4, 4.51e-4 at c = 0.5, 0.25, 0.125 (a per-step filter would remove 2 and 4 times as much); issues 32 and 35",
         },
     ],
 };

@@ -22,19 +22,19 @@ pub const CASE: Case = Case {
             row: "max fall velocity, finer grid against coarser",
             quick: true,
             full: false,
-            why: "the quick grids (h = 1/64 and 1/96, 8 and 12 cells per radius) refine h and dt together far from the range of the paper's 2% (h = 1/256 against 1/384, where the full case measured 1.9% with Baroclinic): 6.9% here (11.92 and 12.74) since the disk moves by Newton-Euler with a virtual mass (issue 35; 6.7% with the projection, 10.92 and 11.66); at a common dt = 7.5e-4 the two grids differed by 3.9% with the projection; issue 16",
+            why: "the quick grids (h = 1/64 and 1/96, 8 and 12 cells per radius) refine h and dt together far from the range of the paper's 2% (h = 1/256 against 1/384, where the full case measured 1.9% with Baroclinic): 7.2% here (13.26 and 14.20) since the disk moves by Newton-Euler with the no-slip at its surface markers (issue 45; 6.9%, 11.92 and 12.74, with the no-slip on the nodes inside the surface, issue 35; 6.7% with the projection, 10.92 and 11.66); at a common dt = 7.5e-4 the two grids differed by 3.9% with the projection; issue 16",
         },
         KnownFailure {
             row: "h = 1/64: at rest 0.3 after the impact",
             quick: true,
             full: false,
-            why: "since the disk moves by Newton-Euler with the no-slip (issue 35; with the projection it rebounded by 0.008 and rested) it rebounds by 0.16 (e about 0.2 at a Stokes number of about 50) and lands 4 times: the contact model is elastic and the lubrication of the gap is not resolved at 8 cells per radius, so only the fluid's drag takes the energy; without the virtual mass it rebounded as much; the projection's damping was the heavy-fluid body's, not physics. A wet restitution (Legendre et al. 2006) or a lubrication force is the fix; issue 35",
+            why: "with the no-slip at surface markers (issue 45) it rebounds by 0.008 and has 5 local minima of its height after the impact, still moving at 9.4% of its largest speed at the end (on the nodes inside the surface, issue 35, it rebounded by 0.16, e about 0.2 at a Stokes number of about 50, and landed 4 times): the contact model is elastic and the lubrication of the gap is not resolved at 8 cells per radius, so only the fluid's drag takes the energy. A wet restitution (Legendre et al. 2006) or a lubrication force is the fix; issues 35 and 45",
         },
         KnownFailure {
             row: "h = 1/96: at rest 0.3 after the impact",
             quick: true,
             full: false,
-            why: "as at h = 1/64: rebound 0.09, 5 landings and still moving at 3.7% of the fall speed at the end (the rebounded disk is carried by its own wake); issue 35",
+            why: "as at h = 1/64: rebound 0.006, 5 local minima and still moving at 6.1% of the fall speed at the end (on the nodes inside the surface: rebound 0.09, 5 landings, 3.7%); issues 35 and 45",
         },
     ],
 };
