@@ -59,10 +59,10 @@ use rayon::prelude::*;
 pub const SLIP_TOLERANCE: f64 = 1e-3;
 
 /// ... or below this fraction of the bodies' own velocity at the markers (the norm over all
-/// markers of V + Ω × r), whichever stops it first. The slip left is not lost: the next step
-/// carries this step's whole force and corrects it again (integral feedback), so a steady
-/// motion converges to the no-slip whatever this tolerance; it bounds the error of a
-/// transient, a slip of 0.5% of the body's speed for one step.
+/// markers of V + Ω × r, with the recoil taken so far), whichever stops it first. The slip
+/// left is not lost: the next step carries this step's whole force and corrects it again
+/// (integral feedback), so a steady motion converges to the no-slip whatever this tolerance;
+/// it bounds the error of a transient, a slip of 0.5% of the body's speed for one step.
 pub const VELOCITY_TOLERANCE: f64 = 5e-3;
 
 /// At most this many iterations a step (reached only in the first steps of an impulsive start,
@@ -136,6 +136,23 @@ struct Recoil {
     /// The momentum and angular momentum the fluid has taken so far, ρ_F Σ x h^d, ρ_F Σ r × x h^d.
     force: DVec3,
     torque: DVec3,
+    /// The body's velocity and angular velocity before the solve.
+    velocity: DVec3,
+    angular_velocity: DVec3,
+}
+
+impl Recoil {
+    /// Σ |V' + Ω' × r|² over the body's markers, with the body's velocities after the
+    /// recoil taken so far.
+    fn rigid_norm(&self, nodes: &[(Stencil, DVec3)], dim: usize, rho_f: f64) -> f64 {
+        let v = self.velocity - self.force * (self.inv_e / rho_f);
+        let w = self.angular_velocity - solve_inertia(dim, self.j_e, self.torque);
+        let (lo, hi) = self.range;
+        nodes[lo..hi]
+            .iter()
+            .map(|&(_, rv)| (v + w.cross(rv)).length_squared())
+            .sum()
+    }
 }
 
 impl NoSlip {
@@ -219,8 +236,6 @@ pub fn noslip(
     ns.nodes.clear();
     ns.r.clear();
     ns.x.clear();
-    // Σ |V + Ω × r|² over the markers.
-    let mut rigid_norm = 0.0;
     // The markers, the slip there, each body's recoil and its markers' last forces.
     for (entity, body, patch, state, law, mat, volume, virt, markers) in &bodies {
         if !(*law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()) {
@@ -242,7 +257,6 @@ pub fn noslip(
             let u = st.interpolate(&grid, &fields.u);
             ns.nodes.push((st, rv));
             ns.r.push(ubar - u);
-            rigid_norm += ubar.length_squared();
             ns.x.push(DVec3::ZERO);
         }
         let _ = last;
@@ -259,6 +273,8 @@ pub fn noslip(
             p_torque: DVec3::ZERO,
             force: DVec3::ZERO,
             torque: DVec3::ZERO,
+            velocity: state.velocity,
+            angular_velocity: state.angular_velocity,
         });
     }
     if ns.nodes.is_empty() {
@@ -282,10 +298,14 @@ pub fn noslip(
     } else {
         0.0
     };
-    let stop = (SLIP_TOLERANCE.powi(2) * rr_step.max(carried))
-        .max(VELOCITY_TOLERANCE.powi(2) * rigid_norm);
+    let slip_stop = SLIP_TOLERANCE.powi(2) * rr_step.max(carried);
+    let mut rigid_norm: f64 = ns
+        .bodies
+        .iter()
+        .map(|b| b.rigid_norm(&ns.nodes, dim, rho_f))
+        .sum();
     for it in 0..MAX_ITERATIONS {
-        if rr <= stop {
+        if rr <= slip_stop.max(VELOCITY_TOLERANCE.powi(2) * rigid_norm) {
             break;
         }
         // ap = J K S p + B M_E⁻¹ Bᵀ p.
@@ -309,6 +329,11 @@ pub fn noslip(
             rec.force += rec.p_force * (alpha * rho_f);
             rec.torque += rec.p_torque * (alpha * rho_f);
         }
+        rigid_norm = ns
+            .bodies
+            .iter()
+            .map(|b| b.rigid_norm(&ns.nodes, dim, rho_f))
+            .sum();
         let rr_new = dot(&ns.r, &ns.r);
         let beta = rr_new / rr;
         rr = rr_new;
