@@ -401,6 +401,8 @@ pub struct Scheduler {
     last_in_set: HashMap<PhysicsSet, &'static str>,
     last_in_startup_set: HashMap<PhysicsSet, &'static str>,
     names: Vec<&'static str>,
+    /// The set of each of `names` (its place in [`PhysicsSet::ALL`]).
+    name_sets: Vec<usize>,
     state: Vec<StateEntry>,
 }
 
@@ -413,6 +415,7 @@ impl Default for Scheduler {
             last_in_set: HashMap::new(),
             last_in_startup_set: HashMap::new(),
             names: Vec::new(),
+            name_sets: Vec::new(),
             state: Vec::new(),
         }
     }
@@ -453,7 +456,7 @@ impl Scheduler {
         sink.clear();
     }
 
-    /// The names of the systems of the step schedule, in the order they were added (the
+    /// The names of the systems of the step schedule, in the order they run (the
     /// startup systems are not among them unless they also run at every step).
     pub fn step_systems(&self) -> &[&'static str] {
         &self.names
@@ -568,11 +571,19 @@ impl PluginContext<'_> {
         }
     }
 
-    fn check_name(&mut self, name: &'static str) -> anyhow::Result<()> {
+    /// Records `name` among the step's systems in the order they run: after every system of
+    /// its set and of the sets before it.
+    fn check_name(&mut self, set: PhysicsSet, name: &'static str) -> anyhow::Result<()> {
         if self.scheduler.names.contains(&name) {
             anyhow::bail!("a system named `{name}` is already registered");
         }
-        self.scheduler.names.push(name);
+        let k = PhysicsSet::ALL
+            .iter()
+            .position(|s| *s == set)
+            .unwrap_or(PhysicsSet::ALL.len());
+        let at = self.scheduler.name_sets.partition_point(|&s| s <= k);
+        self.scheduler.names.insert(at, name);
+        self.scheduler.name_sets.insert(at, k);
         Ok(())
     }
 
@@ -584,7 +595,7 @@ impl PluginContext<'_> {
         name: &'static str,
         system: impl IntoSystem<(), (), M> + Send + Sync + 'static,
     ) -> anyhow::Result<()> {
-        self.check_name(name)?;
+        self.check_name(set, name)?;
         let timed = IntoAdapterSystem::new(
             Timed {
                 name,

@@ -104,11 +104,14 @@ fn a_body_straddling_the_boundary_moves_as_the_same_body_in_the_middle() {
             du / umax,
             dc.length()
         );
-        // Round-off: a few hundred steps' worth of ulps of O(1) quantities. A wrongly
-        // wrapped patch shows up at O(1).
-        assert!(err < 1e-9, "shift {shift:?}: relative difference {err:.3e}");
+        // Round-off: a few hundred steps' worth of ulps of O(1) quantities, amplified by the
+        // no-slip's conjugate gradients (the markers' kernel weights differ in the last bits
+        // between the shifted runs; 6e-9 measured). A wrongly wrapped patch shows up at O(1).
+        assert!(err < 1e-7, "shift {shift:?}: relative difference {err:.3e}");
+        // The centre has moved about 0.4 cells with a velocity that differs by round-off as
+        // above: a relative 1e-9 of 0.0125 is 1e-11.
         assert!(
-            dc.length() < 1e-12,
+            dc.length() < 1e-10,
             "shift {shift:?}: centre {c:?} vs {expect:?}"
         );
     }

@@ -37,10 +37,16 @@ pub const CASE: Case = Case {
     run: high_re_sphere,
     known_failures: &[
         KnownFailure {
+            row: "64^3: largest relative growth of the fluid's kinetic energy once the sphere rests",
+            quick: true,
+            full: true,
+            why: "+1.57% (1% allowed) with the no-slip at surface markers (issue 45; 0 with the solve's velocity stop taken against the body's velocity before its recoil, +1.6% on the nodes inside the surface): the sphere is still moving at 2.4% of its largest speed at t = 0.6 while the contact holds it, and the solve, stopped at 0.5% of the body's velocity, exchanges energy with the fluid; the 96^3 run not re-run; issues 35 and 45",
+        },
+        KnownFailure {
             row: "64^3: energy removed by the grid-scale dissipation by t = 0.1 at 0.5 of the step",
             quick: true,
             full: true,
-            why: "+20.0% (2.137e-2 against 1.780e-2) since the no-slip is held at surface markers (issue 45; +11.3%, 6.675e-3 against 5.998e-3, on the nodes inside the surface): the flow inside the body is fluid, and the markers' forcing, spread by the kernel, puts three times as much grid-scale content into the flow as the staircase did; see the row at 0.25 of the step; issues 32 and 45",
+            why: "+22.4% (2.133e-2 against 1.743e-2; +20.0% with the velocity stop taken before the recoil) since the no-slip is held at surface markers (issue 45; +11.3%, 6.675e-3 against 5.998e-3, on the nodes inside the surface): the flow inside the body is fluid, and the markers' forcing, spread by the kernel, puts three times as much grid-scale content into the flow as the staircase did; see the row at 0.25 of the step; issues 32 and 45",
         },
         KnownFailure {
             row: "64^3: energy removed by the grid-scale dissipation by t = 0.1 at 0.25 of the step",
