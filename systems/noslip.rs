@@ -216,6 +216,30 @@ type NewtonBodies<'w, 's> = Query<
     ),
 >;
 
+/// Whether a body is in the solve: dynamic, moving by Newton-Euler, on the grid.
+fn in_solve(law: &MotionLaw, body: &Body, patch: &GridPatch) -> bool {
+    *law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()
+}
+
+/// The last forces of body `id` when they are one per marker of its `n` (none before its
+/// first solve, or after its markers changed).
+fn last_forces(last: &[Vec<DVec3>], id: usize, n: usize) -> Option<&[DVec3]> {
+    last.get(id).filter(|l| l.len() == n).map(|l| l.as_slice())
+}
+
+/// E = (ρ - ρ_F) V + M_v, the body's mass beyond the fluid inside it with its virtual mass,
+/// and J_E, its inertia.
+fn excess(
+    mat: &Material,
+    volume: &ShapeVolume,
+    virt: &VirtualMass,
+    state: &RigidState,
+    rho_f: f64,
+) -> (f64, DMat3) {
+    let e = (mat.density - rho_f) * volume.0 + virt.mass;
+    (e, state.inertia * (e / state.volume.max(f64::MIN_POSITIVE)))
+}
+
 /// The no-slip system.
 #[allow(clippy::too_many_arguments)]
 pub fn noslip(
@@ -238,16 +262,11 @@ pub fn noslip(
     ns.x.clear();
     // The markers, the slip there, each body's recoil and its markers' last forces.
     for (entity, body, patch, state, law, mat, volume, virt, markers) in &bodies {
-        if !(*law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()) {
+        if !in_solve(law, body, patch)
+            || last_forces(&ns.last, body.id, markers.points.len()).is_none()
+        {
             continue;
         }
-        let Some(last) = ns
-            .last
-            .get(body.id)
-            .filter(|l| l.len() == markers.points.len())
-        else {
-            continue;
-        };
         let start = ns.nodes.len();
         for &m in &markers.points {
             let pos = state.center + state.orientation * m;
@@ -259,10 +278,8 @@ pub fn noslip(
             ns.r.push(ubar - u);
             ns.x.push(DVec3::ZERO);
         }
-        let _ = last;
         // E + M_v (`VirtualMass`): positive for every body.
-        let e = (mat.density - rho_f) * volume.0 + virt.mass;
-        let j_e = state.inertia * (e / state.volume.max(f64::MIN_POSITIVE));
+        let (e, j_e) = excess(mat, volume, virt, state, rho_f);
         ns.bodies.push(Recoil {
             entity,
             id: body.id,
@@ -402,14 +419,10 @@ pub fn carry(
     let dv = grid.cell_volume();
     let mut any = false;
     for (_, body, patch, mut state, law, mat, volume, virt, markers) in &mut bodies {
-        if !(*law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()) {
+        if !in_solve(law, body, patch) {
             continue;
         }
-        let Some(last) = ns
-            .last
-            .get(body.id)
-            .filter(|l| l.len() == markers.points.len())
-        else {
+        let Some(last) = last_forces(&ns.last, body.id, markers.points.len()) else {
             continue;
         };
         let (mut force, mut torque) = (DVec3::ZERO, DVec3::ZERO);
@@ -427,8 +440,7 @@ pub fn carry(
             torque += rv.cross(f * dv);
             any = true;
         }
-        let e = (mat.density - rho_f) * volume.0 + virt.mass;
-        let j_e = state.inertia * (e / state.volume.max(f64::MIN_POSITIVE));
+        let (e, j_e) = excess(mat, volume, virt, &state, rho_f);
         if e > 0.0 {
             state.velocity -= force * (rho_f / e);
             state.angular_velocity -= solve_inertia(dim, j_e, torque * rho_f);
@@ -439,7 +451,7 @@ pub fn carry(
     }
     crate::solvers::operators::curl_add(&grid, &ns.p_grid, fields.omega_mut());
     for (_, body, patch, state, law, _, _, _, markers) in &bodies {
-        if !(*law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()) {
+        if !in_solve(law, body, patch) {
             continue;
         }
         for &m in &markers.points {
