@@ -18,22 +18,16 @@ pub const CASE: Case = Case {
     run: dt_independence,
     known_failures: &[
         KnownFailure {
-            row: "h = 1/32: U(t = 1.2) at Δt/2",
-            quick: true,
-            full: false,
-            why: "1.5196 against 1.5351 at Δt (-1.005%; -1.8% with the no-slip on the nodes inside the surface, -9.3% with the projection) since the body (density 1.02) moves by Newton-Euler with the no-slip at its surface markers and the last step's force carried through the diffusion (issue 45): the body still slows as the step shrinks; solved to 1e-5 instead of 0.5% of its speed it gave -0.53%, so part is the solve's stop and part the splitting; issue 45",
-        },
-        KnownFailure {
             row: "h = 1/32: U(t = 1.2) at Δt/4",
             quick: true,
             full: false,
-            why: "1.5167 against 1.5351 at Δt (-1.19%; -2.9% on the nodes, -13.3% with the projection): as at Δt/2; issue 45",
+            why: "1.5155 against 1.5348 at Δt (-1.26%; Δt/2 passes at -0.98%; -2.9% and -1.8% with the no-slip on the nodes inside the surface, -13.3% with the projection) since the body (density 1.02) moves by Newton-Euler with the no-slip at its surface markers and the last step's force carried through the diffusion (issue 45): the body still slows as the step shrinks; solved to 1e-5 (with markers h apart) it gave -0.74%, so part is the solve's stop and part the splitting; issue 45",
         },
         KnownFailure {
             row: "h = 1/32, Δt: velocity jump at a step shortened",
             quick: true,
             full: false,
-            why: "1.98e-3 U (8e-4 with the no-slip on the nodes inside the surface) since the no-slip is held at surface markers with the last step's force carried into the next, scaled by the ratio of the steps (issue 45): 1.9e-3 without the carried force, 5.5e-3 with it solved to 1e-5; the part of the force that does not scale with the step is not separated; issue 45",
+            why: "2.11e-3 U (8e-4 with the no-slip on the nodes inside the surface) since the no-slip is held at surface markers with the last step's force carried into the next, scaled by the ratio of the steps (issue 45): 1.9e-3 without the carried force, 5.5e-3 with it solved to 1e-5 (markers h apart); the part of the force that does not scale with the step is not separated; issue 45",
         },
         KnownFailure {
             row: "h = 1/48: U(t = 1.2) at Δt/",
