@@ -360,11 +360,7 @@ pub fn noslip(
     }
     // The spread field is zero again off this step's stencils; the next step's first guess.
     for (st, _) in &ns.nodes {
-        st.visit(&grid, |g, _| {
-            for c in ns.p_grid.iter_mut() {
-                c[g] = 0.0;
-            }
-        });
+        zero_on(st, &grid, &mut ns.p_grid);
     }
     // The next step carries this step's whole force: the carried part and the correction.
     if ns.carried.len() == m {
@@ -456,13 +452,18 @@ pub fn carry(
         }
         for &m in &markers.points {
             let pos = state.center + state.orientation * m;
-            Stencil::at(&grid, pos).visit(&grid, |g, _| {
-                for c in ns.p_grid.iter_mut() {
-                    c[g] = 0.0;
-                }
-            });
+            zero_on(&Stencil::at(&grid, pos), &grid, &mut ns.p_grid);
         }
     }
+}
+
+/// Zeroes `field` on the nodes of stencil `st` (the spread field is zero off the stencils).
+fn zero_on(st: &Stencil, grid: &Grid, field: &mut [Vec<f64>]) {
+    st.visit(grid, |g, _| {
+        for c in field.iter_mut() {
+            c[g] = 0.0;
+        }
+    });
 }
 
 /// u += α K p over the whole grid.
@@ -480,11 +481,7 @@ fn add_response(u: &mut [Vec<f64>], kp: &[Vec<f64>], alpha: f64) {
 fn apply(ns: &mut NoSlip, grid: &Grid, spectral: &mut Spectral, nu_dt: f64, dv: f64, rho_f: f64) {
     let dim = grid.dim;
     for (st, _) in &ns.nodes {
-        st.visit(grid, |g, _| {
-            for c in ns.p_grid.iter_mut() {
-                c[g] = 0.0;
-            }
-        });
+        zero_on(st, grid, &mut ns.p_grid);
     }
     for ((st, _), p) in ns.nodes.iter().zip(&ns.p) {
         st.visit(grid, |g, w| {
