@@ -1,63 +1,104 @@
 //! The quick tier: the reduced version of every case of the registry (`tumble::validate::CASES`,
 //! the one list `tumble validate` also runs), each asserting against an analytic solution or a
-//! published reference with the case's own tolerances. Every case runs, and the test fails
-//! naming every case that failed (a failing case is never skipped). Rows the registry lists as
-//! known failures (with the reason and the issue that owns them) are printed as FAIL and do
-//! not fail the test; a known failure that starts passing does.
-//!
-//! `TUMBLE_QUICK_CASES=a,b` runs only the named cases (to rerun one while working on it).
+//! published reference with the case's own tolerances. Each case is its own test
+//! (`quick_tier::<case>`, e.g. `cargo test --release --test suite quick_tier::dkt` reruns one),
+//! so a failing case is named by the harness and never hides another, and the harness runs
+//! the cases side by side, each on one worker thread: on two cores most cases run no faster on
+//! two threads than on one (their loops are short), so two at a time halve the tier's wall
+//! time (the results do not depend on the number of threads). Rows the registry lists as known
+//! failures (with the reason and the issue that owns them) are printed as FAIL and do not fail
+//! the test; a known failure that starts passing does. A registered case without a test here
+//! fails `every_registered_case_has_a_quick_test`.
 
 use tumble::validate::{CASES, run_case};
 
-#[test]
-fn quick_tier_of_every_registered_case() {
-    let only = std::env::var("TUMBLE_QUICK_CASES").ok();
-    let selected: Vec<_> = CASES
+/// Runs the quick version of the registered case `name` on one worker thread and fails on a
+/// row that fails unexpectedly, on the run's error, or on a known failure that now passes.
+fn quick(name: &str) {
+    let case = CASES
         .iter()
-        .filter(|c| {
-            only.as_deref()
-                .is_none_or(|o| o.split(',').any(|n| n.trim() == c.name))
-        })
+        .find(|c| c.name == name)
+        .unwrap_or_else(|| panic!("no case {name} in the registry"));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
+    let rep = pool.install(|| case.run(true));
+    println!("{rep}\n  ({:.1} s)", rep.seconds);
+    for r in rep.rows.iter().filter(|r| !r.pass()) {
+        if let Some(k) = rep.known_failure(r) {
+            println!("  FAIL (known) {}: {} ({})", name, r.quantity, k.why);
+        }
+    }
+    let unexpected = rep.unexpected_failures();
+    let stale = rep.stale_known_failures();
+    assert!(
+        unexpected.is_empty() && stale.is_empty(),
+        "{name}: failing unexpectedly: [{}]; known failures that now pass (remove them from the registry): [{}]",
+        unexpected.join("; "),
+        stale.join("; ")
+    );
+}
+
+/// One test per case, and the list of their names.
+macro_rules! quick_tier {
+    ($($test:ident => $name:literal,)*) => {
+        /// The cases this file has a test for.
+        const LISTED: &[&str] = &[$($name),*];
+        mod quick_tier {
+            $(
+                #[test]
+                fn $test() {
+                    super::quick($name);
+                }
+            )*
+        }
+    };
+}
+
+quick_tier! {
+    poisson => "poisson",
+    remesh => "remesh",
+    lamb_oseen => "lamb-oseen",
+    taylor_green_2d => "taylor-green-2d",
+    taylor_green_3d => "taylor-green-3d",
+    high_re_sphere => "high-re-sphere",
+    sedimentation_2d => "sedimentation-2d",
+    sphere_settling => "sphere-settling",
+    stokes_settling => "stokes-settling",
+    periodic_array => "periodic-array",
+    dt_independence => "dt-independence",
+    added_mass => "added-mass",
+    stratified_rest => "stratified-rest",
+    rebound_vacuum => "rebound-vacuum",
+    ellipsoid_sphere => "ellipsoid-sphere",
+    dkt => "dkt",
+    tank_vacuum => "tank-vacuum",
+    tank_pile => "tank-pile",
+    still_pool => "still-pool",
+    standing_wave => "standing-wave",
+    rayleigh_taylor => "rayleigh-taylor",
+    floating => "floating",
+    column_collapse => "column-collapse",
+    cup => "cup",
+    pool_drop => "pool-drop",
+    kleefsman => "kleefsman",
+}
+
+#[test]
+fn every_registered_case_has_a_quick_test() {
+    let missing: Vec<_> = CASES
+        .iter()
+        .map(|c| c.name)
+        .filter(|n| !LISTED.contains(n))
         .collect();
-    assert!(!selected.is_empty(), "no case selected");
-    let start = std::time::Instant::now();
-    let mut failed = Vec::new();
-    let mut known = Vec::new();
-    let mut stale = Vec::new();
-    for case in selected {
-        let rep = case.run(true);
-        println!("{rep}\n  ({:.1} s)", rep.seconds);
-        let unexpected = rep.unexpected_failures();
-        if !unexpected.is_empty() {
-            failed.push(format!("{}: {}", case.name, unexpected.join("; ")));
-        }
-        for r in rep.rows.iter().filter(|r| !r.pass()) {
-            if let Some(k) = rep.known_failure(r) {
-                known.push(format!("{}: {} ({})", case.name, r.quantity, k.why));
-            }
-        }
-        for k in rep.stale_known_failures() {
-            stale.push(format!("{}: {k}", case.name));
-        }
-    }
-    println!(
-        "quick tier: {:.1} s, {} case(s) failing unexpectedly, {} known failing row(s)",
-        start.elapsed().as_secs_f64(),
-        failed.len(),
-        known.len()
-    );
-    for k in &known {
-        println!("  FAIL (known) {k}");
-    }
+    let unknown: Vec<_> = LISTED
+        .iter()
+        .filter(|n| CASES.iter().all(|c| c.name != **n))
+        .collect();
     assert!(
-        failed.is_empty(),
-        "quick tier: failing cases: {}",
-        failed.join(", ")
-    );
-    assert!(
-        stale.is_empty(),
-        "known failures that now pass (remove them from the registry): {}",
-        stale.join(", ")
+        missing.is_empty() && unknown.is_empty(),
+        "registered cases without a quick test: {missing:?}; quick tests of no registered case: {unknown:?}"
     );
 }
 
