@@ -4,7 +4,7 @@
 use super::common::{MODEL, dynamic_body};
 use crate::scene::Scene;
 use crate::sim::engine::Simulation;
-use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
+use crate::validate::{Case, Report, Row, RunTime};
 use std::f64::consts::PI;
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -17,20 +17,7 @@ pub const CASE: Case = Case {
     full_time: RunTime::Long,
     quick_time: RunTime::Minutes,
     run: stokes_settling,
-    known_failures: &[
-        KnownFailure {
-            row: "h = 1/32 (3.2 cells per radius), density",
-            quick: false,
-            full: true,
-            why: "the quick tier's densities pass since the no-slip is held at surface markers (issue 45: 0.9988 / 0.9977 / 0.9983 / 0.9986 at 0.01 / 0.5 / 2 / 20 with markers h apart, 1.0001 / 0.9998 / 0.9997 / 1.0007 1.5 h apart); the full tier was not re-run with them. On the nodes inside the surface: -2.5% to -2.8% at every density (full tier: 0.9744 / 0.9745 / 0.9745 / 0.9745 / 0.9742 / 0.9740 / 0.9739 / 0.9743 / 0.9724 at 0.01 / 0.1 / 0.5 / 1.1 / 2 / 5 / 20 / 100 / 1000) since a body that barely moves has its no-slip solved (systems/noslip.rs, issue 35: warm-started, to 1e-3 of the step's slip); the same at diffusion numbers 0.125 / 0.5 / 2 (0.9731 / 0.9741 / 0.9771). The six-iteration truncated solve before gave 0.99 and depended on the step (0.988 / 0.992 / 0.996). The error is the staircase of rigid nodes: the same sphere centred off the nodes moves at 1.0133 at h = 1/32, and on a node at 0.9938 at h = 1/64. Off the nodes by (0.37, 0.21, 0.5) / (0.5, 0.5, 0.5) / (0.13, 0.71, 0.29) h (full tier, density 2, measured with `tumble run` to t = 0.32): 0.9781 / 0.9843 / 1.0051, the first failing; issue 35",
-        },
-        KnownFailure {
-            row: "h = 1/48 (4.8 cells per radius), density",
-            quick: false,
-            full: true,
-            why: "not re-run with the no-slip at surface markers (issue 45; the centred sphere moved at 0.9939 and one offset at 0.9985 of Hasimoto's with them, density 2, measured with `tumble run`). On the nodes inside the surface: -2.5% to -2.7% at every density (full tier: 0.9753 / 0.9754 / 0.9753 / 0.9753 / 0.9742 / 0.9736 / 0.9733 / 0.9736 / 0.9727 at 0.01 / 0.1 / 0.5 / 1.1 / 2 / 5 / 20 / 100 / 1000), no closer than at h = 1/32 (the node sets of 3.2 and 4.8 cells per radius sit differently against the surface; 0.9938 at 1/64, and 1.0133 at 1/32 with the centre off the nodes): the staircase of rigid nodes. Off the nodes by (0.37, 0.21, 0.5) / (0.5, 0.5, 0.5) / (0.13, 0.71, 0.29) h (density 2, measured with `tumble run` to t = 0.32): 0.9767 / 0.9986 / 0.9755, the first and last failing; issue 35",
-        },
-    ],
+    known_failures: &[],
 };
 
 /// Velocity along gravity of a sphere of radius 0.1 and density `rho` settling in a periodic
