@@ -4,20 +4,25 @@
 use super::common::{MODEL, dynamic_body};
 use crate::scene::Scene;
 use crate::sim::engine::Simulation;
-use crate::validate::{Case, Report, Row, RunTime};
+use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
 use std::f64::consts::PI;
 
 /// The case: what it checks, against what, and the rows known to fail.
 pub const CASE: Case = Case {
     name: "stokes-settling",
-    description: "a sphere settling at Re << 1 in a periodic box: U within 2% of Hasimoto's for body/fluid densities 0.01 to 1000 at diffusion number 0.5 (and, in the full tier, at three offsets of the centre against the grid), and within 2% of each other at diffusion numbers 0.125, 0.5 and 2 (density 2)",
+    description: "a sphere settling at Re << 1 in a periodic box: U within 2% of Hasimoto's for body/fluid densities 0.01 to 1000 at diffusion number 0.5 (and, in the full tier, at three offsets of the centre against the grid), and within 1% of each other at diffusion numbers 0.125, 0.5 and 2 (density 2); in the full tier the mean error over the densities smaller at 4.8 than at 3.2 cells per radius",
     reference: "Hasimoto 1959, Sangani & Acrivos 1982",
     full: "h = 1/32 and 1/48, densities 0.01, 0.1, 0.5, 1.1, 2, 5, 20, 100, 1000; density 2 also at three offsets of the centre against the grid",
     quick: "h = 1/32, densities 0.01, 0.5, 2 and 20 (100 and 1000 relax over 0.2 and 2.2 time units: thousands of steps)",
     full_time: RunTime::Long,
     quick_time: RunTime::Minutes,
     run: stokes_settling,
-    known_failures: &[],
+    known_failures: &[KnownFailure {
+        row: "mean |U / U_Hasimoto - 1| over the densities smaller at h = 1/48",
+        quick: false,
+        full: true,
+        why: "0.574% at h = 1/48 (4.8 cells per radius) against 0.039% at 1/32 (3.2), every value within 1% (measured 2026-11-28): the markers' retraction r = 0.40 + 0.50 H h is fitted over 3.2 to 6.4 cells per radius (docs/numerics.md), and at 3.2 it happens to sit on Hasimoto's value; the calibration runs had the largest error falling from 1.85% to 0.5% at 6.4 cells, so the error is not monotone in h between 3.2 and 4.8; issue 45",
+    }],
 };
 
 /// Velocity along gravity of a sphere of radius 0.1 and density `rho` settling in a periodic
@@ -104,8 +109,11 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
     // U / U_Hasimoto at density 2, h = 1/32, diffusion number 0.5 (also the middle of the
     // diffusion-number row).
     let mut rho2 = None;
+    // Per grid, the mean over the densities of |U / U_Hasimoto - 1|.
+    let mut mean_err = Vec::new();
     for &n in grids {
         let mut line = Vec::new();
+        let mut errs = Vec::new();
         for &rho in densities {
             // The slowest relaxations: the periodic flow's, e^{-4π²νt} (0.25% left at
             // t = 0.15, 6e-6 at 0.3), and the sphere's, τ = (2ρ_s/ρ_F + 1) a²/(9ν) (0.2 at
@@ -126,18 +134,35 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
                         rho2 = Some(u / u_h);
                     }
                     line.push(format!("{rho}: {:+.1}%", 100.0 * (u / u_h - 1.0)));
+                    errs.push((u / u_h - 1.0).abs());
                     rep.rows.push(Row::rel(row, 1.0, u / u_h, 0.02));
                 }
                 Err(e) => {
                     line.push(format!("{rho}: failed"));
                     rep.notes.push(format!("h = 1/{n}, density {rho}: {e}"));
                     rep.rows.push(Row::rel(row, 1.0, f64::NAN, 0.02));
+                    errs.push(f64::NAN);
                 }
             }
         }
+        mean_err.push((n, errs.iter().sum::<f64>() / errs.len() as f64));
         rep.notes.push(format!(
             "h = 1/{n}, diffusion number 0.5, U against Hasimoto by density: {}",
             line.join(", ")
+        ));
+    }
+    // The error must shrink with h (full tier: two grids).
+    if let [(n0, e0), (n1, e1)] = mean_err[..] {
+        rep.rows.push(Row::yes_no(
+            format!(
+                "mean |U / U_Hasimoto - 1| over the densities smaller at h = 1/{n1} than at 1/{n0} (the error shrinking with h)"
+            ),
+            e1 < e0,
+        ));
+        rep.notes.push(format!(
+            "mean |U / U_Hasimoto - 1| over the densities: {:.3}% at h = 1/{n0}, {:.3}% at 1/{n1}",
+            100.0 * e0,
+            100.0 * e1
         ));
     }
     // The drag must not depend on where the surface cuts the grid (full tier): density 2 with
@@ -189,7 +214,7 @@ fn stokes_settling(quick: bool) -> anyhow::Result<Report> {
         ),
         0.0,
         hi / lo - 1.0,
-        0.02,
+        0.01,
     ));
     rep.notes.push(format!(
         "h = 1/{n}, density 2, U / U_Hasimoto by diffusion number: {}",
