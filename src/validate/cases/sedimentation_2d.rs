@@ -22,7 +22,7 @@ pub const CASE: Case = Case {
             row: "max fall velocity, finer grid against coarser",
             quick: true,
             full: false,
-            why: "the quick grids (h = 1/64 and 1/96, 8 and 12 cells per radius) refine h and dt together far from the range of the paper's 2% (h = 1/256 against 1/384, where the full case measured 1.9% with Baroclinic): 7.2% here (13.26 and 14.20) since the disk moves by Newton-Euler with the no-slip at its surface markers (issue 45; 6.9%, 11.92 and 12.74, with the no-slip on the nodes inside the surface, issue 35; 6.7% with the projection, 10.92 and 11.66); at a common dt = 7.5e-4 the two grids differed by 3.9% with the projection; issue 16",
+            why: "the quick grids (h = 1/64 and 1/96, 8 and 12 cells per radius) refine h and dt together far from the range of the paper's 2% (h = 1/256 against 1/384, where the full case measured 1.9% with Baroclinic): 7.6% here (13.20 and 14.20; 7.2%, 13.26, when the markers landed) since the disk moves by Newton-Euler with the no-slip at its surface markers (issue 45; 6.9%, 11.92 and 12.74, with the no-slip on the nodes inside the surface, issue 35; 6.7% with the projection, 10.92 and 11.66); at a common dt = 7.5e-4 the two grids differed by 3.9% with the projection; issue 16",
         },
         KnownFailure {
             row: "h = 1/64: at rest 0.3 after the impact",
