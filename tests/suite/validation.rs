@@ -1,7 +1,8 @@
 //! The quick tier: the reduced version of every case of the registry (`tumble::validate::CASES`,
 //! the one list `tumble validate` also runs), each asserting against an analytic solution or a
 //! published reference with the case's own tolerances. Each case is its own test
-//! (`quick_tier::<case>`, e.g. `cargo test --release --test suite quick_tier::dkt` reruns one),
+//! (`quick_tier::<minutes|seconds>::<case>`, e.g. `cargo test --release --test suite
+//! quick_tier::minutes::dkt` reruns one),
 //! so a failing case is named by the harness and never hides another, and the harness runs
 //! the cases side by side, each on one worker thread: on two cores most cases run no faster on
 //! two threads than on one (their loops are short), so two at a time halve the tier's wall
@@ -10,7 +11,7 @@
 //! the test; a known failure that starts passing does. A registered case without a test here
 //! fails `every_registered_case_has_a_quick_test`.
 
-use tumble::validate::{CASES, run_case};
+use tumble::validate::{CASES, RunTime, run_case};
 
 /// Runs the quick version of the registered case `name` on one worker thread and fails on a
 /// row that fails unexpectedly, on the run's error, or on a known failure that now passes.
@@ -40,16 +41,23 @@ fn quick(name: &str) {
     );
 }
 
-/// One test per case, and the list of their names.
+/// One test per case, grouped by the registry's quick run time, and the list of their names.
+/// The harness starts tests in the order of their names, so `minutes` (the long cases) start
+/// before `seconds`, and the short cases fill the end of the run instead of one long case
+/// running alone on one core.
 macro_rules! quick_tier {
-    ($($test:ident => $name:literal,)*) => {
-        /// The cases this file has a test for.
-        const LISTED: &[&str] = &[$($name),*];
+    ($($group:ident: $time:ident { $($test:ident => $name:literal,)* })*) => {
+        /// The cases this file has a test for, with the run time of their group.
+        const LISTED: &[(&str, RunTime)] = &[$($(($name, RunTime::$time),)*)*];
         mod quick_tier {
             $(
-                #[test]
-                fn $test() {
-                    super::quick($name);
+                mod $group {
+                    $(
+                        #[test]
+                        fn $test() {
+                            super::super::quick($name);
+                        }
+                    )*
                 }
             )*
         }
@@ -57,48 +65,56 @@ macro_rules! quick_tier {
 }
 
 quick_tier! {
-    poisson => "poisson",
-    remesh => "remesh",
-    lamb_oseen => "lamb-oseen",
-    taylor_green_2d => "taylor-green-2d",
-    taylor_green_3d => "taylor-green-3d",
-    high_re_sphere => "high-re-sphere",
-    sedimentation_2d => "sedimentation-2d",
-    sphere_settling => "sphere-settling",
-    stokes_settling => "stokes-settling",
-    periodic_array => "periodic-array",
-    dt_independence => "dt-independence",
-    added_mass => "added-mass",
-    stratified_rest => "stratified-rest",
-    rebound_vacuum => "rebound-vacuum",
-    ellipsoid_sphere => "ellipsoid-sphere",
-    dkt => "dkt",
-    tank_vacuum => "tank-vacuum",
-    tank_pile => "tank-pile",
-    still_pool => "still-pool",
-    standing_wave => "standing-wave",
-    rayleigh_taylor => "rayleigh-taylor",
-    floating => "floating",
-    column_collapse => "column-collapse",
-    cup => "cup",
-    pool_drop => "pool-drop",
-    kleefsman => "kleefsman",
+    minutes: Minutes {
+        column_collapse => "column-collapse",
+        cup => "cup",
+        dkt => "dkt",
+        dt_independence => "dt-independence",
+        high_re_sphere => "high-re-sphere",
+        kleefsman => "kleefsman",
+        periodic_array => "periodic-array",
+        pool_drop => "pool-drop",
+        sphere_settling => "sphere-settling",
+        stokes_settling => "stokes-settling",
+        tank_pile => "tank-pile",
+    }
+    seconds: Seconds {
+        added_mass => "added-mass",
+        ellipsoid_sphere => "ellipsoid-sphere",
+        floating => "floating",
+        lamb_oseen => "lamb-oseen",
+        poisson => "poisson",
+        rayleigh_taylor => "rayleigh-taylor",
+        rebound_vacuum => "rebound-vacuum",
+        remesh => "remesh",
+        sedimentation_2d => "sedimentation-2d",
+        standing_wave => "standing-wave",
+        still_pool => "still-pool",
+        stratified_rest => "stratified-rest",
+        tank_vacuum => "tank-vacuum",
+        taylor_green_2d => "taylor-green-2d",
+        taylor_green_3d => "taylor-green-3d",
+    }
 }
 
 #[test]
 fn every_registered_case_has_a_quick_test() {
     let missing: Vec<_> = CASES
         .iter()
+        .filter(|c| !LISTED.iter().any(|(n, _)| *n == c.name))
         .map(|c| c.name)
-        .filter(|n| !LISTED.contains(n))
         .collect();
     let unknown: Vec<_> = LISTED
         .iter()
-        .filter(|n| CASES.iter().all(|c| c.name != **n))
+        .filter(|(n, _)| CASES.iter().all(|c| c.name != *n))
+        .collect();
+    let misplaced: Vec<_> = LISTED
+        .iter()
+        .filter(|(n, t)| CASES.iter().any(|c| c.name == *n && c.quick_time != *t))
         .collect();
     assert!(
-        missing.is_empty() && unknown.is_empty(),
-        "registered cases without a quick test: {missing:?}; quick tests of no registered case: {unknown:?}"
+        missing.is_empty() && unknown.is_empty() && misplaced.is_empty(),
+        "registered cases without a quick test: {missing:?}; quick tests of no registered case: {unknown:?}; in the wrong run-time group: {misplaced:?}"
     );
 }
 
