@@ -316,13 +316,14 @@ pub fn noslip(
         0.0
     };
     let slip_stop = SLIP_TOLERANCE.powi(2) * rr_step.max(carried);
-    let mut rigid_norm: f64 = ns
-        .bodies
-        .iter()
-        .map(|b| b.rigid_norm(&ns.nodes, dim, rho_f))
-        .sum();
+    let rigid_norm = |ns: &NoSlip| -> f64 {
+        ns.bodies
+            .iter()
+            .map(|b| b.rigid_norm(&ns.nodes, dim, rho_f))
+            .sum()
+    };
     for it in 0..MAX_ITERATIONS {
-        if rr <= slip_stop.max(VELOCITY_TOLERANCE.powi(2) * rigid_norm) {
+        if rr <= slip_stop.max(VELOCITY_TOLERANCE.powi(2) * rigid_norm(ns)) {
             break;
         }
         // ap = J K S p + B M_E⁻¹ Bᵀ p.
@@ -346,11 +347,7 @@ pub fn noslip(
             rec.force += rec.p_force * (alpha * rho_f);
             rec.torque += rec.p_torque * (alpha * rho_f);
         }
-        rigid_norm = ns
-            .bodies
-            .iter()
-            .map(|b| b.rigid_norm(&ns.nodes, dim, rho_f))
-            .sum();
+
         let rr_new = dot(&ns.r, &ns.r);
         let beta = rr_new / rr;
         rr = rr_new;

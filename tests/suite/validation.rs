@@ -16,15 +16,13 @@ use tumble::validate::{CASES, RunTime, run_case};
 /// Runs the quick version of the registered case `name` on one worker thread and fails on a
 /// row that fails unexpectedly, on the run's error, or on a known failure that now passes.
 fn quick(name: &str) {
-    let case = CASES
-        .iter()
-        .find(|c| c.name == name)
-        .unwrap_or_else(|| panic!("no case {name} in the registry"));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .expect("a one-thread pool");
-    let rep = pool.install(|| case.run(true));
+    let rep = pool
+        .install(|| run_case(name, true))
+        .unwrap_or_else(|e| panic!("{e:#}"));
     println!("{rep}\n  ({:.1} s)", rep.seconds);
     for r in rep.rows.iter().filter(|r| !r.pass()) {
         if let Some(k) = rep.known_failure(r) {

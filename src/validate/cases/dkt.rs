@@ -42,7 +42,6 @@ fn dkt_run(end: f64, c_scale: f64) -> anyhow::Result<Dkt> {
         }
     })?;
     let h = scene.grid().h;
-    let r = RADIUS;
     let mut sim = Simulation::new(scene)?;
     sim.set_stop_at(Some(end));
     let mut run = Dkt {
@@ -57,7 +56,7 @@ fn dkt_run(end: f64, c_scale: f64) -> anyhow::Result<Dkt> {
         let st = dynamic_states(&mut sim);
         let (a, b) = (&st[0].1, &st[1].1);
         let d = b.center - a.center;
-        let gap = d.length() - 2.0 * r;
+        let gap = d.length() - 2.0 * RADIUS;
         run.gmin = run.gmin.min(gap);
         let t = sim.time();
         if gap < 2.0 * h {
