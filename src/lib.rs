@@ -6,6 +6,8 @@
 //!
 //! The modules are layers; each uses only the ones above it in this list (a test checks it):
 //! - [`base`]: grid, fields, kernels, typed parameters;
+//! - [`parallel`]: the slab decomposition and the communicator (MPI or one process): all-to-all
+//!   transposes, halo exchanges, reductions;
 //! - [`solvers`]: the FFT engine, the spectral operators, the curl, the particle line sweeps;
 //! - [`bodies`]: shapes, level sets, body components, the integrals over a body, the contact
 //!   kernel;
@@ -26,6 +28,7 @@ pub mod base;
 pub mod bodies;
 pub mod cli;
 pub mod io;
+pub mod parallel;
 pub mod run;
 pub mod scene;
 pub mod schedule;

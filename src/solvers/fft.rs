@@ -25,11 +25,24 @@
 //! * the inverse runs the same passes in reverse order and normalizes by `1/(nx ny nz)` once,
 //!   right after the complex-to-real transform of each row.
 //!
+//! # Split over processes
+//!
+//! [`FftEngine::split`] transforms one process's slab of z-planes ([`crate::parallel::Slabs`]):
+//! the x and y passes above run on its planes, one all-to-all ([`Comm::all_to_all`]) hands every
+//! process its range of y rows with every z, and the z pass runs there. The spectrum a process
+//! holds has the layout above with `ny` replaced by its row count (coefficient `(i, j, k)` of its
+//! rows `j0..j0 + rows` at `i + (nx/2 + 1) * ((j - j0) + rows * k)`), so an operator that works on
+//! the whole spectrum works on a process's share once it reads the y wavenumbers of its rows.
+//! The inverse runs the same steps backwards. Each process's blocks are copied to and from the
+//! transpose's buffer in one parallel pass; the receiving side needs none, since a process's
+//! planes of another's rows are one contiguous range of the latter's spectrum.
+//!
 //! Work is split into a fixed set of units (rows, planes or line bundles) that depends on the
 //! grid only; each unit is transformed by exactly the same code whichever worker or thread runs
 //! it, and there is no reduction, so results are bit-identical for any rayon thread count.
 
 use std::f64::consts::PI;
+use std::ops::Range;
 use std::sync::Arc;
 
 use rayon::prelude::*;
@@ -39,6 +52,7 @@ use rustfft::{Fft, FftPlanner};
 
 use crate::base::grid::{Grid, SyncPtr};
 use crate::base::pool::Pool;
+use crate::parallel::{Comm, DecompositionError, Slabs};
 
 /// Double precision complex number.
 pub type C64 = Complex<f64>;
@@ -200,7 +214,12 @@ type Plan = Arc<dyn Fft<f64>>;
 struct Engine {
     nx: usize,
     ny: usize,
+    /// z-planes of the whole grid.
     nz: usize,
+    /// z-planes of the real field this engine transforms (`nz` unless split over processes).
+    nk: usize,
+    /// y rows of the spectral layout this engine holds (`ny` unless split over processes).
+    nyl: usize,
     nxh: usize,
     r2c: Arc<dyn RealToComplex<f64>>,
     c2r: Arc<dyn ComplexToReal<f64>>,
@@ -228,21 +247,21 @@ fn check(r: Result<(), FftError>) {
 
 impl Engine {
     fn complex_len(&self) -> usize {
-        self.nxh * self.ny * self.nz
+        self.nxh * self.nyl * self.nz
     }
 
     fn real_len(&self) -> usize {
-        self.nx * self.ny * self.nz
+        self.nx * self.ny * self.nk
     }
 
     /// Rows (x lines) per chunk so that there are at most `workers` chunks.
     fn rows_per_chunk(&self, workers: usize) -> usize {
-        (self.ny * self.nz).div_ceil(workers).max(1)
+        (self.ny * self.nk).div_ceil(workers).max(1)
     }
 
     /// z-planes per chunk so that there are at most `workers` chunks.
     fn planes_per_chunk(&self, workers: usize) -> usize {
-        self.nz.div_ceil(workers).max(1)
+        self.nk.div_ceil(workers).max(1)
     }
 
     /// Zeroes the imaginary parts a real row cannot carry, then runs the c2r transform of one
@@ -346,8 +365,9 @@ impl Engine {
         }
     }
 
-    /// Unnormalized forward transform of `input` into `out`.
-    fn forward(&self, pool: &Pool<Worker>, input: &[f64], out: &mut [C64]) {
+    /// Unnormalized forward x and y transforms of the `nk` planes of `input` into `out`
+    /// (`nxh * ny * nk` values).
+    fn forward_xy(&self, pool: &Pool<Worker>, input: &[f64], out: &mut [C64]) {
         let (nx, ny, nxh) = (self.nx, self.ny, self.nxh);
         if self.fused {
             let ppc = self.planes_per_chunk(self.chunks);
@@ -383,27 +403,33 @@ impl Engine {
                 });
             self.run_pass(&self.ypass, &*self.y_fwd, pool, None, out);
         }
-        if let Some([zf, _]) = &self.z_plans {
-            self.run_pass(&self.zpass, &**zf, pool, None, out);
+    }
+
+    /// The z transforms (3D only) of the spectral layout `data` (`nxh * nyl * nz` values), in
+    /// place or from `src`: forward, or inverse when `inverse`.
+    fn z(&self, pool: &Pool<Worker>, inverse: bool, src: Option<&[C64]>, data: &mut [C64]) {
+        if let Some(plans) = &self.z_plans {
+            let plan = &*plans[usize::from(inverse)];
+            self.run_pass(&self.zpass, plan, pool, src, data);
         }
     }
 
-    /// Normalized inverse transform of `src` (or of `work` itself when `None`) into `out`;
-    /// `work` is destroyed.
-    fn inverse(
+    /// Normalized inverse y and x transforms of the `nk` planes of `src` (or of `work` itself
+    /// when `None`) into `out`; `work` is destroyed.
+    fn inverse_xy(
         &self,
         pool: &Pool<Worker>,
         mut src: Option<&[C64]>,
         work: &mut [C64],
         out: &mut [f64],
     ) {
-        if let Some([_, zi]) = &self.z_plans {
-            self.run_pass(&self.zpass, &**zi, pool, src.take(), work);
-        }
         let (nx, ny, nxh) = (self.nx, self.ny, self.nxh);
-        let scale = 1.0 / self.real_len() as f64;
+        let scale = 1.0 / (nx * ny * self.nz) as f64;
         if self.fused {
-            // `src` was consumed by the z pass (fused implies 3D).
+            assert!(
+                src.is_none(),
+                "fft: the fused planes read their own work buffer"
+            );
             let ppc = self.planes_per_chunk(self.chunks);
             work.par_chunks(ppc * nxh * ny)
                 .zip(out.par_chunks_mut(ppc * nx * ny))
@@ -430,10 +456,92 @@ impl Engine {
     }
 }
 
-/// The FFT engine of one [`Grid`]: plans (immutable) and per-worker scratch.
+/// The FFT engine of one [`Grid`]: plans (immutable) and per-worker scratch; split over the
+/// processes of a [`Comm`], the transposes between them.
 pub struct FftEngine {
     eng: Engine,
     pool: Pool<Worker>,
+    split: Option<Split>,
+}
+
+/// The transpose between the slab layout (this process's z-planes, every y) and the spectral
+/// layout (this process's y rows, every z) of a split engine.
+struct Split {
+    comm: Arc<Comm>,
+    slabs: Slabs,
+    /// The x/y-transformed planes, `nxh * ny * nk`, before the forward transpose and after the
+    /// inverse one.
+    planes: Vec<C64>,
+    /// The same values in blocks by process (the block for process `s` holds its y rows of every
+    /// plane), the transposes' send or receive buffer.
+    packed: Vec<C64>,
+    /// The copies between `planes` and `packed`: (offset in `packed`, offset in `planes`,
+    /// length); disjoint, one per process and plane.
+    moves: Vec<[usize; 3]>,
+    /// Counts and displacements of the blocks in `packed` (by destination process).
+    pcount: Vec<usize>,
+    pdispl: Vec<usize>,
+    /// Counts and displacements of the blocks in the spectral layout (by source process): the
+    /// block from process `r` is its planes of this process's rows, a contiguous range.
+    scount: Vec<usize>,
+    sdispl: Vec<usize>,
+}
+
+impl Split {
+    fn new(n: [usize; 3], nxh: usize, comm: Arc<Comm>) -> Result<Self, DecompositionError> {
+        let slabs = Slabs::new(n, comm.size(), comm.rank())?;
+        let ny = n[1];
+        let nk = slabs.my_planes().len();
+        let nyl = slabs.my_rows().len();
+        let (mut moves, mut pcount, mut pdispl) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut scount, mut sdispl) = (Vec::new(), Vec::new());
+        for s in 0..slabs.ranks {
+            let rows = slabs.rows(s);
+            let block = nxh * rows.len();
+            pdispl.push(nxh * nk * rows.start);
+            pcount.push(block * nk);
+            for kl in 0..nk {
+                moves.push([
+                    nxh * nk * rows.start + block * kl,
+                    nxh * (rows.start + ny * kl),
+                    block,
+                ]);
+            }
+            let planes = slabs.planes(s);
+            sdispl.push(nxh * nyl * planes.start);
+            scount.push(nxh * nyl * planes.len());
+        }
+        Ok(Split {
+            comm,
+            slabs,
+            planes: vec![C64::default(); nxh * ny * nk],
+            packed: vec![C64::default(); nxh * ny * nk],
+            moves,
+            pcount,
+            pdispl,
+            scount,
+            sdispl,
+        })
+    }
+
+    /// `planes` into `packed` (`pack`) or back.
+    fn shuffle(&mut self, pack: bool) {
+        let (pl, pk) = (
+            SyncPtr(self.planes.as_mut_ptr()),
+            SyncPtr(self.packed.as_mut_ptr()),
+        );
+        self.moves.par_iter().for_each(|&[p, q, len]| {
+            // SAFETY: the moves' ranges are disjoint in `packed` and in `planes` (one per
+            // process and plane) and in bounds by construction; the two buffers are distinct.
+            unsafe {
+                if pack {
+                    pk.slice_mut(p, len).copy_from_slice(pl.slice_mut(q, len));
+                } else {
+                    pl.slice_mut(q, len).copy_from_slice(pk.slice_mut(p, len));
+                }
+            }
+        });
+    }
 }
 
 impl FftEngine {
@@ -441,6 +549,24 @@ impl FftEngine {
     ///
     /// Panics if a node count is 0 or `h` is not positive and finite.
     pub fn new(grid: &Grid) -> Self {
+        let [_, ny, nz] = grid.n;
+        Self::build(grid, nz, ny, None)
+    }
+
+    /// The engine of this process's share of `grid` split over the processes of `comm` into
+    /// slabs ([`Slabs`]): it transforms this process's z-planes and holds this process's y
+    /// rows of the spectrum (every x wavenumber and z). One process runs the same transposes
+    /// with itself (tests use this to check them against [`FftEngine::new`]).
+    ///
+    /// An error when the grid cannot be split over that many processes.
+    pub fn split(grid: &Grid, comm: Arc<Comm>) -> Result<Self, DecompositionError> {
+        let nxh = grid.n[0] / 2 + 1;
+        let split = Split::new(grid.n, nxh, comm)?;
+        let (nk, nyl) = (split.slabs.my_planes().len(), split.slabs.my_rows().len());
+        Ok(Self::build(grid, nk, nyl, Some(split)))
+    }
+
+    fn build(grid: &Grid, nk: usize, nyl: usize, split: Option<Split>) -> Self {
         let [nx, ny, nz] = grid.n;
         assert!(nx > 0 && ny > 0 && nz > 0, "fft: empty grid {:?}", grid.n);
         assert!(
@@ -459,17 +585,18 @@ impl FftEngine {
         let y_inv = cp.plan_fft_inverse(ny);
         let z_plans = (dim == 3).then(|| [cp.plan_fft_forward(nz), cp.plan_fft_inverse(nz)]);
 
-        let ypass = LinePass::new(ny, nxh, nxh * ny, nz, nxh);
-        let zpass = LinePass::new(nz, nxh * ny, nxh, ny, nxh);
+        // The y pass runs over this process's planes, the z pass over its spectral rows.
+        let ypass = LinePass::new(ny, nxh, nxh * ny, nk.max(1), nxh);
+        let zpass = LinePass::new(nz, nxh * nyl, nxh, nyl.max(1), nxh);
 
         let mut scratch_len = r2c
             .get_scratch_len()
             .max(c2r.get_scratch_len())
             .max(y_fwd.get_inplace_scratch_len())
             .max(y_inv.get_inplace_scratch_len());
-        let fused = dim == 3 && nz >= MIN_FUSED_PLANES;
+        let fused = dim == 3 && nk >= MIN_FUSED_PLANES;
         let mut line_len = if fused { nxh * ny } else { ypass.block * ny };
-        let mut max_units = (ny * nz).max(ypass.units());
+        let mut max_units = (ny * nk).max(ypass.units());
         if let Some([zf, zi]) = &z_plans {
             scratch_len = scratch_len
                 .max(zf.get_inplace_scratch_len())
@@ -493,6 +620,8 @@ impl FftEngine {
             nx,
             ny,
             nz,
+            nk,
+            nyl,
             nxh,
             r2c,
             c2r,
@@ -504,22 +633,51 @@ impl FftEngine {
             fused,
             chunks,
         };
-        FftEngine { eng, pool }
+        FftEngine { eng, pool, split }
     }
 
-    /// Number of complex coefficients of one real field: `(nx/2 + 1) * ny * nz`.
+    /// Number of complex coefficients of one real field this engine holds: `(nx/2 + 1) ny nz`,
+    /// or its spectral rows' share when split.
     pub fn complex_len(&self) -> usize {
         self.eng.complex_len()
     }
 
-    /// Number of nodes of one real field: `nx * ny * nz`.
+    /// Number of nodes of one real field this engine transforms: `nx ny nz`, or its planes'
+    /// share when split.
     pub fn real_len(&self) -> usize {
         self.eng.real_len()
     }
 
-    /// Node counts `[nx, ny, nz]` and `nx/2 + 1`.
+    /// The node counts of the spectral layout this engine holds, `[nx, rows, nz]` (`rows` its
+    /// y rows, `ny` unless split), and `nx/2 + 1`.
     pub fn dims(&self) -> ([usize; 3], usize) {
-        ([self.eng.nx, self.eng.ny, self.eng.nz], self.eng.nxh)
+        ([self.eng.nx, self.eng.nyl, self.eng.nz], self.eng.nxh)
+    }
+
+    /// The y rows of the spectrum this engine holds (all of them unless split).
+    pub fn spectral_rows(&self) -> Range<usize> {
+        match &self.split {
+            Some(s) => s.slabs.my_rows(),
+            None => 0..self.eng.ny,
+        }
+    }
+
+    /// The z-planes of the real field this engine transforms (all of them unless split).
+    pub fn planes(&self) -> Range<usize> {
+        match &self.split {
+            Some(s) => s.slabs.my_planes(),
+            None => 0..self.eng.nz,
+        }
+    }
+
+    /// The number of nodes of the whole grid (the transforms' normalization).
+    pub fn global_len(&self) -> usize {
+        self.eng.nx * self.eng.ny * self.eng.nz
+    }
+
+    /// The processes the transforms are split over (`None`: one, without transposes).
+    pub fn comm(&self) -> Option<&Comm> {
+        self.split.as_ref().map(|s| &*s.comm)
     }
 
     /// Forward real-to-complex transform of one real field (unnormalized) into `out`
@@ -527,16 +685,47 @@ impl FftEngine {
     pub fn forward(&mut self, input: &[f64], out: &mut [C64]) {
         assert_eq!(input.len(), self.real_len(), "fft: input length");
         assert_eq!(out.len(), self.complex_len(), "fft: output length");
-        self.eng.forward(&self.pool, input, out);
+        match &mut self.split {
+            None => self.eng.forward_xy(&self.pool, input, out),
+            Some(sp) => {
+                self.eng.forward_xy(&self.pool, input, &mut sp.planes);
+                sp.shuffle(true);
+                sp.comm.all_to_all(
+                    &sp.packed, &sp.pcount, &sp.pdispl, out, &sp.scount, &sp.sdispl,
+                );
+            }
+        }
+        self.eng.z(&self.pool, false, None, out);
     }
 
     /// Inverse complex-to-real transform normalized by `1/(nx ny nz)`. With `src`, the
     /// spectrum is read from it and `work` is the scratch (`src` is kept); without, `work`
     /// holds the spectrum and is destroyed. Panics if a length is wrong.
-    pub fn inverse(&mut self, src: Option<&[C64]>, work: &mut [C64], out: &mut [f64]) {
+    pub fn inverse(&mut self, mut src: Option<&[C64]>, work: &mut [C64], out: &mut [f64]) {
         assert_eq!(work.len(), self.complex_len(), "fft: input length");
         assert_eq!(out.len(), self.real_len(), "fft: output length");
-        self.eng.inverse(&self.pool, src, work, out);
+        if self.eng.z_plans.is_some() {
+            self.eng.z(&self.pool, true, src.take(), work);
+        }
+        match &mut self.split {
+            None => self.eng.inverse_xy(&self.pool, src, work, out),
+            Some(sp) => {
+                if let Some(s) = src {
+                    // 2D is never split (Slabs::new), so the z pass consumed `src`.
+                    work.copy_from_slice(s);
+                }
+                sp.comm.all_to_all(
+                    work,
+                    &sp.scount,
+                    &sp.sdispl,
+                    &mut sp.packed,
+                    &sp.pcount,
+                    &sp.pdispl,
+                );
+                sp.shuffle(false);
+                self.eng.inverse_xy(&self.pool, None, &mut sp.planes, out);
+            }
+        }
     }
 }
 

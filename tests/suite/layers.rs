@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 /// The layers, lowest first. A module may use its own layer and every layer before it.
 const LAYERS: &[&[&str]] = &[
     &["base"],
+    &["parallel"],
     &["solvers"],
     &["bodies"],
     &["schedule"],

@@ -14,6 +14,7 @@ mod contact_units;
 mod cup_mesh;
 mod dam_break;
 mod determinism;
+mod distributed;
 mod example_plugin;
 mod free_surface_output;
 mod generators;

@@ -1,0 +1,272 @@
+//! The communicator: MPI over the system's Open MPI (the `mpi` feature), or one process.
+//!
+//! Only this file names MPI. Every operation is collective over the communicator's ranks
+//! except [`Comm::exchange`], which pairs each rank with two partners. Calls come from one thread
+//! at a time (the schedule runs one system at a time; MPI is initialized with
+//! `MPI_THREAD_SERIALIZED`), never from inside a rayon loop.
+
+use std::sync::Mutex;
+
+use crate::parallel::slabs::Slabs;
+use rustfft::num_complex::Complex;
+
+/// Double precision complex number, as the FFTs store it.
+pub type C64 = Complex<f64>;
+
+/// A group of processes that run one simulation together.
+pub struct Comm {
+    inner: Inner,
+    /// Scratch of the reductions (one value per rank and entry); grows to the longest reduction
+    /// once, then is reused.
+    gathered: Mutex<Vec<f64>>,
+}
+
+enum Inner {
+    /// One process: every collective is a local copy or nothing.
+    Solo,
+    #[cfg(feature = "mpi")]
+    Mpi(mpi::topology::SimpleCommunicator),
+}
+
+// SAFETY: an MPI communicator is a handle that MPI lets any thread use when the library was
+// initialized with MPI_THREAD_SERIALIZED or above ([`Comm::world`] checks it) and the calls are
+// not concurrent: every method takes `&self` but is only called from the schedule's systems and
+// the driver, which run one at a time, never from parallel loops (the module docs).
+#[cfg(feature = "mpi")]
+unsafe impl Send for Comm {}
+#[cfg(feature = "mpi")]
+unsafe impl Sync for Comm {}
+
+impl std::fmt::Debug for Comm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Comm(rank {} of {})", self.rank(), self.size())
+    }
+}
+
+impl Default for Comm {
+    fn default() -> Self {
+        Comm::solo()
+    }
+}
+
+impl Comm {
+    /// One process on its own.
+    pub fn solo() -> Self {
+        Comm {
+            inner: Inner::Solo,
+            gathered: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// The processes of an MPI communicator (a duplicate of `comm`, so tumble's messages never
+    /// meet the caller's).
+    #[cfg(feature = "mpi")]
+    pub fn from_mpi(comm: &impl mpi::topology::Communicator) -> Self {
+        Comm {
+            inner: Inner::Mpi(comm.duplicate()),
+            gathered: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// This process's rank, `0..size`.
+    pub fn rank(&self) -> usize {
+        match &self.inner {
+            Inner::Solo => 0,
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::topology::Communicator;
+                c.rank() as usize
+            }
+        }
+    }
+
+    /// The number of processes.
+    pub fn size(&self) -> usize {
+        match &self.inner {
+            Inner::Solo => 1,
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::topology::Communicator;
+                c.size() as usize
+            }
+        }
+    }
+
+    /// Whether this is rank 0 (the one that writes files meant to exist once).
+    pub fn is_root(&self) -> bool {
+        self.rank() == 0
+    }
+
+    /// Waits until every rank has called it.
+    pub fn barrier(&self) {
+        match &self.inner {
+            Inner::Solo => {}
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::collective::CommunicatorCollectives;
+                c.barrier()
+            }
+        }
+    }
+
+    /// Replaces every entry of `v` by its sum over the ranks, added in rank order, so every rank
+    /// gets the same bits (module docs of [`crate::parallel`]).
+    pub fn sum(&self, v: &mut [f64]) {
+        self.reduce(v, |a, b| a + b);
+    }
+
+    /// Replaces every entry of `v` by its maximum over the ranks.
+    pub fn max(&self, v: &mut [f64]) {
+        self.reduce(v, f64::max);
+    }
+
+    /// The sum over the ranks of one value.
+    pub fn sum_one(&self, x: f64) -> f64 {
+        let mut v = [x];
+        self.sum(&mut v);
+        v[0]
+    }
+
+    /// The maximum over the ranks of one value.
+    pub fn max_one(&self, x: f64) -> f64 {
+        let mut v = [x];
+        self.max(&mut v);
+        v[0]
+    }
+
+    fn reduce(&self, v: &mut [f64], op: impl Fn(f64, f64) -> f64) {
+        let (p, len) = (self.size(), v.len());
+        let mut all = self.gathered.lock().unwrap_or_else(|e| e.into_inner());
+        if all.len() < p * len {
+            all.resize(p * len, 0.0);
+        }
+        let all = &mut all[..p * len];
+        match &self.inner {
+            Inner::Solo => all.copy_from_slice(v),
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::collective::CommunicatorCollectives;
+                c.all_gather_into(&*v, all);
+            }
+        }
+        for (e, x) in v.iter_mut().enumerate() {
+            let mut acc = all[e];
+            for r in 1..p {
+                acc = op(acc, all[r * len + e]);
+            }
+            *x = acc;
+        }
+    }
+
+    /// All-to-all with counts: rank `r`'s block for rank `s` is `send[sdispl[s]..][..scount[s]]`
+    /// and lands on `s` at `recv[rdispl[r]..][..rcount[r]]`. Counts and displacements are in
+    /// complex values. One process copies its one block.
+    pub fn all_to_all(
+        &self,
+        send: &[C64],
+        scount: &[usize],
+        sdispl: &[usize],
+        recv: &mut [C64],
+        rcount: &[usize],
+        rdispl: &[usize],
+    ) {
+        match &self.inner {
+            Inner::Solo => {
+                let n = scount[0];
+                assert_eq!(
+                    n, rcount[0],
+                    "all_to_all: one process sends what it receives"
+                );
+                recv[rdispl[0]..rdispl[0] + n].copy_from_slice(&send[sdispl[0]..sdispl[0] + n]);
+            }
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::collective::CommunicatorCollectives;
+                use mpi::datatype::{Partition, PartitionMut};
+                let i = |v: &[usize]| -> Vec<i32> { v.iter().map(|&x| count(x)).collect() };
+                // Four vectors of `size` entries per transpose, a few bytes per rank: far below
+                // the transpose's own cost, and MPI allocates as much inside.
+                let (sc, sd, rc, rd) = (i(scount), i(sdispl), i(rcount), i(rdispl));
+                let s = Partition::new(send, &sc[..], &sd[..]);
+                let mut r = PartitionMut::new(recv, &rc[..], &rd[..]);
+                c.all_to_all_varcount_into(&s, &mut r);
+            }
+        }
+    }
+
+    /// Sends `to_below` to the rank below and `to_above` to the rank above (periodic) and
+    /// receives the rank above's `to_below` into `from_above` and the rank below's `to_above`
+    /// into `from_below`: a halo exchange along the split axis. With one process the data goes
+    /// round to itself.
+    pub fn exchange(
+        &self,
+        slabs: &Slabs,
+        to_below: &[f64],
+        to_above: &[f64],
+        from_below: &mut [f64],
+        from_above: &mut [f64],
+    ) {
+        match &self.inner {
+            Inner::Solo => {
+                assert_eq!(
+                    slabs.neighbours(),
+                    (0, 0),
+                    "exchange: one process is its neighbour"
+                );
+                from_above.copy_from_slice(to_below);
+                from_below.copy_from_slice(to_above);
+            }
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::point_to_point::send_receive_into;
+                use mpi::topology::Communicator;
+                let (below, above) = slabs.neighbours();
+                let (pb, pa) = (
+                    c.process_at_rank(below as i32),
+                    c.process_at_rank(above as i32),
+                );
+                send_receive_into(to_below, &pb, from_above, &pa);
+                send_receive_into(to_above, &pa, from_below, &pb);
+            }
+        }
+    }
+}
+
+/// An MPI count: the buffers of one rank stay below 2³¹ values of their type.
+#[cfg(feature = "mpi")]
+fn count(x: usize) -> i32 {
+    i32::try_from(x).unwrap_or_else(|_| {
+        panic!("comm: a message of {x} values is past MPI's 32-bit counts; use more processes")
+    })
+}
+
+/// The MPI environment of a process started by `mpirun`: initialized once, finalized when the
+/// value is dropped (at the end of `main`).
+#[cfg(feature = "mpi")]
+pub struct Mpi {
+    universe: mpi::environment::Universe,
+}
+
+#[cfg(feature = "mpi")]
+impl Mpi {
+    /// Initializes MPI for serialized calls from any thread; `None` if it was already
+    /// initialized, an error if the library cannot serialize calls from several threads.
+    pub fn init() -> anyhow::Result<Option<Mpi>> {
+        use mpi::Threading;
+        let Some((universe, level)) = mpi::initialize_with_threading(Threading::Serialized) else {
+            return Ok(None);
+        };
+        if level < Threading::Serialized {
+            anyhow::bail!(
+                "the MPI library offers thread level {level:?}; tumble needs Serialized (calls \
+                 from one thread at a time, not always the main one)"
+            );
+        }
+        Ok(Some(Mpi { universe }))
+    }
+
+    /// The communicator of every process of the run.
+    pub fn world(&self) -> Comm {
+        Comm::from_mpi(&self.universe.world())
+    }
+}

@@ -1,0 +1,126 @@
+//! Checks of the distributed layer that hold on any number of processes: the suite runs them on
+//! one process (the transposes with itself), `tests/mpi.rs` under `mpirun -np 2` and `-np 3`
+//! (uneven slabs). Each compares the split computation with the same computation done whole on
+//! every process, with a tolerance that round-off of the transforms explains (1e-12 of the
+//! field's size) or exact equality where no arithmetic differs.
+
+use std::sync::Arc;
+
+use tumble::base::grid::Grid;
+use tumble::parallel::{Comm, Slabs};
+use tumble::solvers::fft::{C64, FftEngine};
+
+/// A smooth-plus-rough deterministic field on the whole grid (every mode present).
+pub fn field(grid: &Grid, seed: usize) -> Vec<f64> {
+    (0..grid.len())
+        .map(|i| {
+            let r = ((i * 2654435761 + seed * 97) % 1000003) as f64 / 1000003.0 - 0.5;
+            let [x, y, z] = grid.pos(i % grid.n[0], (i / grid.n[0]) % grid.n[1], i / grid.plane());
+            (2.0 * x + 0.3).sin() * (3.0 * y).cos() + (z - 0.1 * x).sin() + r
+        })
+        .collect()
+}
+
+/// This process's planes of a whole field.
+pub fn local_planes(grid: &Grid, whole: &[f64], planes: std::ops::Range<usize>) -> Vec<f64> {
+    whole[planes.start * grid.plane()..planes.end * grid.plane()].to_vec()
+}
+
+fn max_abs_c(v: &[C64]) -> f64 {
+    v.iter().map(|z| z.norm()).fold(0.0, f64::max)
+}
+
+/// The split forward transform equals the whole one on this process's spectral rows, and the
+/// split inverse gives back this process's planes; returns the largest relative difference
+/// (over every process).
+pub fn fft_matches_whole(comm: Arc<Comm>, n: [usize; 3]) -> f64 {
+    let grid = Grid::new(n, 0.1, [0.0, -0.2, 0.3]);
+    let whole = field(&grid, 1);
+    let mut serial = FftEngine::new(&grid);
+    let mut spec = vec![C64::default(); serial.complex_len()];
+    serial.forward(&whole, &mut spec);
+    let scale = max_abs_c(&spec);
+
+    let mut eng = FftEngine::split(&grid, comm.clone()).expect("grid splits");
+    let mine = local_planes(&grid, &whole, eng.planes());
+    let mut out = vec![C64::default(); eng.complex_len()];
+    eng.forward(&mine, &mut out);
+    // The serial layout (i, j, k) restricted to this process's rows.
+    let ([_, nyl, nz], nxh) = eng.dims();
+    let rows = eng.spectral_rows();
+    let mut worst = 0.0f64;
+    for k in 0..nz {
+        for jl in 0..nyl {
+            for i in 0..nxh {
+                let a = out[i + nxh * (jl + nyl * k)];
+                let b = spec[i + nxh * (rows.start + jl + n[1] * k)];
+                worst = worst.max((a - b).norm() / scale);
+            }
+        }
+    }
+    let mut back = vec![0.0; eng.real_len()];
+    eng.inverse(
+        Some(&out),
+        &mut vec![C64::default(); eng.complex_len()],
+        &mut back,
+    );
+    let amp = whole.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    for (a, b) in back.iter().zip(&mine) {
+        worst = worst.max((a - b).abs() / amp);
+    }
+    comm.max_one(worst)
+}
+
+/// Halo planes from the neighbours (periodic in z) are the whole field's planes next to this
+/// process's slab; returns the number of wrong values over every process (0 expected).
+pub fn halo_planes_are_the_neighbours(comm: Arc<Comm>, n: [usize; 3]) -> f64 {
+    let grid = Grid::new(n, 0.1, [0.0; 3]);
+    let whole = field(&grid, 2);
+    let slabs = Slabs::new(n, comm.size(), comm.rank()).expect("grid splits");
+    let planes = slabs.my_planes();
+    let p = grid.plane();
+    let mine = local_planes(&grid, &whole, planes.clone());
+    let (first, last) = (&mine[..p], &mine[mine.len() - p..]);
+    let (mut below, mut above) = (vec![0.0; p], vec![0.0; p]);
+    comm.exchange(&slabs, first, last, &mut below, &mut above);
+    let kb = (planes.start + n[2] - 1) % n[2];
+    let ka = planes.end % n[2];
+    let wrong = below
+        .iter()
+        .zip(&whole[kb * p..(kb + 1) * p])
+        .chain(above.iter().zip(&whole[ka * p..(ka + 1) * p]))
+        .filter(|(a, b)| a != b)
+        .count();
+    comm.sum_one(wrong as f64)
+}
+
+/// Sums over the processes are the same bits on every process, and are the rank-ordered sum;
+/// returns the number of processes that disagree (0 expected).
+pub fn sums_are_identical_everywhere(comm: Arc<Comm>) -> f64 {
+    // Values whose sum depends on the order of the additions.
+    let term = |r: usize| {
+        [
+            1e16 * (r as f64 + 1.0).sin(),
+            1.0 / (r as f64 + 3.0),
+            -(r as f64),
+        ]
+    };
+    let mut v = term(comm.rank());
+    comm.sum(&mut v);
+    let mut ordered = term(0);
+    for r in 1..comm.size() {
+        let t = term(r);
+        for e in 0..3 {
+            ordered[e] += t[e];
+        }
+    }
+    let mine = v
+        .iter()
+        .zip(&ordered)
+        .any(|(a, b)| a.to_bits() != b.to_bits());
+    let mut m = [comm.max_one(v[0]), -comm.max_one(-v[0])];
+    // The maximum and minimum over the processes of the first sum agree only if every process
+    // holds the same bits.
+    m[0] -= m[1];
+    comm.sum_one(f64::from(u8::from(mine))) + f64::from(u8::from(m[0] != 0.0))
+}
