@@ -28,6 +28,11 @@ const CHECKS: &[Check] = &[
         1e-12,
     ),
     (
+        "spectral_matches_whole",
+        |c| checks::spectral_matches_whole(c, [16, 10, 18]),
+        1e-12,
+    ),
+    (
         "halo_planes_are_the_neighbours",
         |c| checks::halo_planes_are_the_neighbours(c, [6, 5, 18]),
         0.0,

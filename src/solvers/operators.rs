@@ -6,7 +6,11 @@
 //! ([`curl_add`]: the penalization's and the pressure projection's). Complex fields use the
 //! layout described in [`crate::solvers::fft`].
 
+use std::ops::Range;
+use std::sync::Arc;
+
 use crate::base::grid::Grid;
+use crate::parallel::{Comm, DecompositionError};
 use crate::solvers::fft::{C64, FftEngine, wavenumber};
 use rayon::prelude::*;
 
@@ -38,14 +42,16 @@ struct Tables {
 }
 
 impl Tables {
-    fn new(grid: &Grid, nxh: usize) -> Self {
+    /// The tables of the spectrum's y rows `rows` (all of them unless the engine is split).
+    fn new(grid: &Grid, nxh: usize, rows: Range<usize>) -> Self {
         let h = grid.h;
         let dim = if grid.n[2] == 1 { 2 } else { 3 };
-        let counts = [nxh, grid.n[1], if dim == 3 { grid.n[2] } else { 1 }];
+        let ranges = [0..nxh, rows, 0..if dim == 3 { grid.n[2] } else { 1 }];
         let mk = |a: usize, zero_nyq: bool| -> Vec<f64> {
             let n = grid.n[a];
             let len = n as f64 * h;
-            (0..counts[a])
+            ranges[a]
+                .clone()
                 .map(|m| {
                     if (a == 2 && dim == 2) || (zero_nyq && 2 * m == n) {
                         0.0
@@ -121,13 +127,24 @@ impl Spectral {
     ///
     /// Panics if a node count is 0 or `h` is not positive and finite.
     pub fn new(grid: &Grid) -> Self {
-        let fft = FftEngine::new(grid);
+        Self::with_engine(grid, FftEngine::new(grid))
+    }
+
+    /// The solver of this process's share of `grid` split over the processes of `comm`
+    /// ([`FftEngine::split`]): real fields are this process's z-planes, the spectrum its y rows.
+    /// Every operator works on the share and gives the whole grid's result there; the energies
+    /// it returns are the whole grid's, the same on every process.
+    pub fn split(grid: &Grid, comm: Arc<Comm>) -> Result<Self, DecompositionError> {
+        Ok(Self::with_engine(grid, FftEngine::split(grid, comm)?))
+    }
+
+    fn with_engine(grid: &Grid, fft: FftEngine) -> Self {
         let dim = if grid.n[2] == 1 { 2 } else { 3 };
         let (_, nxh) = fft.dims();
         let clen = fft.complex_len();
         let ncomp = if dim == 2 { 1 } else { 3 };
         Spectral {
-            tab: Tables::new(grid, nxh),
+            tab: Tables::new(grid, nxh, fft.spectral_rows()),
             fft,
             dim,
             omega_hat: (0..ncomp).map(|_| vec![C64::default(); clen]).collect(),
@@ -275,12 +292,14 @@ impl Spectral {
         self.cached = None;
     }
 
-    /// Number of complex coefficients of one real field: `(nx/2 + 1) * ny * nz`.
+    /// Number of complex coefficients of one real field: `(nx/2 + 1) * ny * nz`, or this
+    /// process's share when split.
     pub fn complex_len(&self) -> usize {
         self.fft.complex_len()
     }
 
-    /// Number of nodes of one real field: `nx * ny * nz`.
+    /// Number of nodes of one real field: `nx * ny * nz`, or this process's planes' share when
+    /// split.
     pub fn real_len(&self) -> usize {
         self.fft.real_len()
     }
@@ -414,7 +433,7 @@ impl Spectral {
         // x index 0 and (even nx) nx/2.
         let weight = |i: usize| if i == 0 || 2 * i == nx { 1.0 } else { 2.0 };
         // Energy per unit volume of a velocity mode: 1/2 |u_hat|^2 / N^2.
-        let n_total = self.fft.real_len() as f64;
+        let n_total = self.fft.global_len() as f64;
         let e_norm = 0.5 / (n_total * n_total);
         let removed = &mut self.removed_rows;
         match &mut self.omega_hat[..] {
@@ -484,10 +503,15 @@ impl Spectral {
             _ => unreachable!("omega_hat has 1 or 3 components"),
         }
         if damped {
-            e_norm * self.removed_rows.iter().sum::<f64>()
+            self.global_sum(e_norm * self.removed_rows.iter().sum::<f64>())
         } else {
             0.0
         }
+    }
+
+    /// The sum of `x` over the processes the solver is split over (`x` itself unless split).
+    fn global_sum(&self, x: f64) -> f64 {
+        self.fft.comm().map_or(x, |c| c.sum_one(x))
     }
 
     /// Diffusion and (3D) divergence cleaning of the vorticity, in place.
@@ -538,7 +562,7 @@ impl Spectral {
         let ([nx, ny, _], nxh) = self.fft.dims();
         let kn2 = self.k_nyquist * self.k_nyquist;
         let weight = |i: usize| if i == 0 || 2 * i == nx { 1.0 } else { 2.0 };
-        let n_total = self.fft.real_len() as f64;
+        let n_total = self.fft.global_len() as f64;
         let e_norm = 0.5 / (n_total * n_total);
         let mut removed = 0.0;
         for c in f.iter_mut() {
@@ -570,7 +594,7 @@ impl Spectral {
             }
             self.fft.inverse(None, &mut self.work, c);
         }
-        removed
+        self.global_sum(removed)
     }
 
     /// Velocity from vorticity: `Lap psi = -omega`, `u = curl psi`, spectrally exact.
@@ -604,10 +628,14 @@ impl Spectral {
             }
             self.cached = Some(version);
         }
-        let n_total = self.real_len() as f64;
+        let n_total = self.fft.global_len() as f64;
+        // The mean (k = 0) sits first in the spectrum of the process that holds y row 0.
+        let holds_mean = self.fft.spectral_rows().start == 0;
         for (c, uc) in u.iter_mut().enumerate() {
             self.velocity_hat(c);
-            self.work[0] = C64::new(background[c] * n_total, 0.0);
+            if holds_mean {
+                self.work[0] = C64::new(background[c] * n_total, 0.0);
+            }
             self.fft.inverse(None, &mut self.work, uc);
         }
     }

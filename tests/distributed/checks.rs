@@ -9,6 +9,7 @@ use std::sync::Arc;
 use tumble::base::grid::Grid;
 use tumble::parallel::{Comm, Slabs};
 use tumble::solvers::fft::{C64, FftEngine};
+use tumble::solvers::operators::{Spectral, TopDamping};
 
 /// A smooth-plus-rough deterministic field on the whole grid (every mode present).
 pub fn field(grid: &Grid, seed: usize) -> Vec<f64> {
@@ -123,4 +124,62 @@ pub fn sums_are_identical_everywhere(comm: Arc<Comm>) -> f64 {
     // holds the same bits.
     m[0] -= m[1];
     comm.sum_one(f64::from(u8::from(mine))) + f64::from(u8::from(m[0] != 0.0))
+}
+
+/// The split spectral operators give the whole grid's results on this process's planes: the
+/// diffusion with damping (and the energy it removed), the velocity from the diffused
+/// vorticity with a background flow, the Laplacian's inverse and the forcing's velocity;
+/// returns the largest difference relative to each result's size (over every process).
+pub fn spectral_matches_whole(comm: Arc<Comm>, n: [usize; 3]) -> f64 {
+    let grid = Grid::new(n, 0.05, [0.1, 0.0, -0.3]);
+    let damp = TopDamping {
+        strength: 0.5,
+        order: 2,
+    };
+    let (nu_dt, bg) = (2e-3, [0.1, -0.2, 0.3]);
+    let omega: Vec<Vec<f64>> = (0..3).map(|c| field(&grid, 4 + c)).collect();
+
+    let mut whole = Spectral::new(&grid);
+    whole.reserve_forcing();
+    let mut w_whole = omega.clone();
+    let e_whole = whole.diffuse(&mut w_whole, nu_dt, damp, 1);
+    let mut u_whole = vec![vec![0.0; grid.len()]; 3];
+    whole.velocity(&mut w_whole, 1, bg, &mut u_whole);
+    let mut x_whole = vec![0.0; grid.len()];
+    whole.solve_laplacian(&omega[0], &mut x_whole);
+    let mut f_whole = vec![vec![0.0; grid.len()]; 3];
+    whole.forcing_velocity(&omega, nu_dt, &mut f_whole);
+
+    let mut sp = Spectral::split(&grid, comm.clone()).expect("grid splits");
+    sp.reserve_forcing();
+    let planes = Slabs::new(n, comm.size(), comm.rank()).unwrap().my_planes();
+    let local = |v: &Vec<f64>| local_planes(&grid, v, planes.clone());
+    let om: Vec<Vec<f64>> = omega.iter().map(local).collect();
+    let mut w = om.clone();
+    let e = sp.diffuse(&mut w, nu_dt, damp, 1);
+    let mut u = vec![vec![0.0; w[0].len()]; 3];
+    sp.velocity(&mut w, 1, bg, &mut u);
+    let mut x = vec![0.0; w[0].len()];
+    sp.solve_laplacian(&om[0], &mut x);
+    let mut f = vec![vec![0.0; w[0].len()]; 3];
+    sp.forcing_velocity(&om, nu_dt, &mut f);
+
+    let rel = |a: &[f64], whole: &[f64]| {
+        let scale = whole.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        let b = &whole[planes.start * grid.plane()..planes.end * grid.plane()];
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max)
+            / scale
+    };
+    let mut worst = ((e - e_whole) / e_whole).abs();
+    for c in 0..3 {
+        worst = worst
+            .max(rel(&w[c], &w_whole[c]))
+            .max(rel(&u[c], &u_whole[c]))
+            .max(rel(&f[c], &f_whole[c]));
+    }
+    worst = worst.max(rel(&x, &x_whole));
+    comm.max_one(worst)
 }
