@@ -19,6 +19,7 @@ fn solo() -> Arc<Comm> {
 fn one_process_checks() {
     assert!(checks::fft_matches_whole(solo(), [16, 12, 20]) <= 1e-12);
     assert!(checks::fft_matches_whole(solo(), [15, 9, 19]) <= 1e-12);
+    assert!(checks::spectral_matches_whole(solo(), [16, 10, 18]) <= 1e-12);
     assert_eq!(
         checks::halo_planes_are_the_neighbours(solo(), [6, 5, 18]),
         0.0
