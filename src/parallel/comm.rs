@@ -13,6 +13,15 @@ use rustfft::num_complex::Complex;
 /// Double precision complex number, as the FFTs store it.
 pub type C64 = Complex<f64>;
 
+/// A value the processes exchange as it is in memory: `f64` and [`C64`].
+#[cfg(feature = "mpi")]
+pub trait Plain: Copy + Send + Sync + mpi::datatype::Equivalence {}
+/// A value the processes exchange as it is in memory: `f64` and [`C64`].
+#[cfg(not(feature = "mpi"))]
+pub trait Plain: Copy + Send + Sync {}
+impl Plain for f64 {}
+impl Plain for C64 {}
+
 /// A group of processes that run one simulation together.
 pub struct Comm {
     inner: Inner,
@@ -160,13 +169,13 @@ impl Comm {
 
     /// All-to-all with counts: rank `r`'s block for rank `s` is `send[sdispl[s]..][..scount[s]]`
     /// and lands on `s` at `recv[rdispl[r]..][..rcount[r]]`. Counts and displacements are in
-    /// complex values. One process copies its one block.
-    pub fn all_to_all(
+    /// values. One process copies its one block.
+    pub fn all_to_all<T: Plain>(
         &self,
-        send: &[C64],
+        send: &[T],
         scount: &[usize],
         sdispl: &[usize],
-        recv: &mut [C64],
+        recv: &mut [T],
         rcount: &[usize],
         rdispl: &[usize],
     ) {

@@ -22,6 +22,8 @@
 
 pub mod comm;
 pub mod slabs;
+pub mod transpose;
 
-pub use comm::Comm;
+pub use comm::{Comm, Plain};
 pub use slabs::{DecompositionError, Slabs, split};
+pub use transpose::Transpose;

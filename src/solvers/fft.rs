@@ -52,7 +52,7 @@ use rustfft::{Fft, FftPlanner};
 
 use crate::base::grid::{Grid, SyncPtr};
 use crate::base::pool::Pool;
-use crate::parallel::{Comm, DecompositionError, Slabs};
+use crate::parallel::{Comm, DecompositionError, Slabs, Transpose};
 
 /// Double precision complex number.
 pub type C64 = Complex<f64>;
@@ -469,78 +469,26 @@ pub struct FftEngine {
 struct Split {
     comm: Arc<Comm>,
     slabs: Slabs,
+    transpose: Transpose,
     /// The x/y-transformed planes, `nxh * ny * nk`, before the forward transpose and after the
     /// inverse one.
     planes: Vec<C64>,
-    /// The same values in blocks by process (the block for process `s` holds its y rows of every
-    /// plane), the transposes' send or receive buffer.
+    /// The transpose's send or receive buffer, as long.
     packed: Vec<C64>,
-    /// The copies between `planes` and `packed`: (offset in `packed`, offset in `planes`,
-    /// length); disjoint, one per process and plane.
-    moves: Vec<[usize; 3]>,
-    /// Counts and displacements of the blocks in `packed` (by destination process).
-    pcount: Vec<usize>,
-    pdispl: Vec<usize>,
-    /// Counts and displacements of the blocks in the spectral layout (by source process): the
-    /// block from process `r` is its planes of this process's rows, a contiguous range.
-    scount: Vec<usize>,
-    sdispl: Vec<usize>,
 }
 
 impl Split {
     fn new(n: [usize; 3], nxh: usize, comm: Arc<Comm>) -> Result<Self, DecompositionError> {
         let slabs = Slabs::new(n, comm.size(), comm.rank())?;
-        let ny = n[1];
-        let nk = slabs.my_planes().len();
-        let nyl = slabs.my_rows().len();
-        let (mut moves, mut pcount, mut pdispl) = (Vec::new(), Vec::new(), Vec::new());
-        let (mut scount, mut sdispl) = (Vec::new(), Vec::new());
-        for s in 0..slabs.ranks {
-            let rows = slabs.rows(s);
-            let block = nxh * rows.len();
-            pdispl.push(nxh * nk * rows.start);
-            pcount.push(block * nk);
-            for kl in 0..nk {
-                moves.push([
-                    nxh * nk * rows.start + block * kl,
-                    nxh * (rows.start + ny * kl),
-                    block,
-                ]);
-            }
-            let planes = slabs.planes(s);
-            sdispl.push(nxh * nyl * planes.start);
-            scount.push(nxh * nyl * planes.len());
-        }
+        let transpose = Transpose::new(&slabs, nxh);
+        let len = transpose.slab_len();
         Ok(Split {
             comm,
             slabs,
-            planes: vec![C64::default(); nxh * ny * nk],
-            packed: vec![C64::default(); nxh * ny * nk],
-            moves,
-            pcount,
-            pdispl,
-            scount,
-            sdispl,
+            transpose,
+            planes: vec![C64::default(); len],
+            packed: vec![C64::default(); len],
         })
-    }
-
-    /// `planes` into `packed` (`pack`) or back.
-    fn shuffle(&mut self, pack: bool) {
-        let (pl, pk) = (
-            SyncPtr(self.planes.as_mut_ptr()),
-            SyncPtr(self.packed.as_mut_ptr()),
-        );
-        self.moves.par_iter().for_each(|&[p, q, len]| {
-            // SAFETY: the moves' ranges are disjoint in `packed` and in `planes` (one per
-            // process and plane) and in bounds by construction; the two buffers are distinct.
-            unsafe {
-                if pack {
-                    pk.slice_mut(p, len).copy_from_slice(pl.slice_mut(q, len));
-                } else {
-                    pl.slice_mut(q, len).copy_from_slice(pk.slice_mut(p, len));
-                }
-            }
-        });
     }
 }
 
@@ -689,10 +637,8 @@ impl FftEngine {
             None => self.eng.forward_xy(&self.pool, input, out),
             Some(sp) => {
                 self.eng.forward_xy(&self.pool, input, &mut sp.planes);
-                sp.shuffle(true);
-                sp.comm.all_to_all(
-                    &sp.packed, &sp.pcount, &sp.pdispl, out, &sp.scount, &sp.sdispl,
-                );
+                sp.transpose
+                    .forward(&sp.comm, &sp.planes, &mut sp.packed, out);
             }
         }
         self.eng.z(&self.pool, false, None, out);
@@ -714,15 +660,8 @@ impl FftEngine {
                     // 2D is never split (Slabs::new), so the z pass consumed `src`.
                     work.copy_from_slice(s);
                 }
-                sp.comm.all_to_all(
-                    work,
-                    &sp.scount,
-                    &sp.sdispl,
-                    &mut sp.packed,
-                    &sp.pcount,
-                    &sp.pdispl,
-                );
-                sp.shuffle(false);
+                sp.transpose
+                    .backward(&sp.comm, work, &mut sp.packed, &mut sp.planes);
                 self.eng.inverse_xy(&self.pool, None, &mut sp.planes, out);
             }
         }
