@@ -22,6 +22,7 @@ use crate::base::fields::{Failure, Fields, Params, Sample, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::TimeStep;
 use crate::bodies::{Body, BodyShape, Material, RigidState};
+use crate::parallel::Decomposition;
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -102,7 +103,15 @@ impl Diagnostics {
     }
 
     /// Measure the fields; returns the sample and where its extremes are.
-    pub fn measure(&mut self, grid: &Grid, fields: &Fields) -> (Sample, Extremes) {
+    ///
+    /// Split over processes (`split`), the sample is the whole grid's, the same on every
+    /// process; a location held by another process is [`ELSEWHERE`].
+    pub fn measure(
+        &mut self,
+        grid: &Grid,
+        fields: &Fields,
+        split: Option<&Decomposition>,
+    ) -> (Sample, Extremes) {
         let nx = grid.n[0];
         let omega = fields.omega();
         let u = &fields.u;
@@ -153,7 +162,25 @@ impl Diagnostics {
                 tot.nan_at = s.nan_at;
             }
         }
-        let n = grid.len() as f64;
+        if let Some(d) = split {
+            let nan = f64::from(u8::from(tot.nan_at.is_some()));
+            let mut sums = [tot.u2, tot.w2, tot.wsum[0], tot.wsum[1], tot.wsum[2], nan];
+            d.comm.sum(&mut sums);
+            let mut maxima = [tot.wmax2, tot.umax2];
+            d.comm.max(&mut maxima);
+            [tot.u2, tot.w2, tot.wsum[0], tot.wsum[1], tot.wsum[2]] =
+                [sums[0], sums[1], sums[2], sums[3], sums[4]];
+            if sums[5] > 0.0 && tot.nan_at.is_none() {
+                tot.nan_at = Some(ELSEWHERE);
+            }
+            if tot.wmax2 < maxima[0] {
+                (tot.wmax2, tot.wmax_at) = (maxima[0], ELSEWHERE);
+            }
+            if tot.umax2 < maxima[1] {
+                (tot.umax2, tot.umax_at) = (maxima[1], ELSEWHERE);
+            }
+        }
+        let n = (grid.plane() * grid.nz_whole) as f64;
         let dv = grid.cell_volume();
         let circulation = if grid.dim == 2 {
             tot.wsum[0] * dv
@@ -362,9 +389,17 @@ fn node_at(grid: &Grid, idx: usize) -> ((usize, usize, usize), [f64; 3]) {
     ((i, j, k), grid.pos(i, j, k))
 }
 
+/// The location of an extreme that another process holds (its node is not on this one's
+/// slab).
+pub const ELSEWHERE: usize = usize::MAX;
+
 /// The grid node `idx` as indices and position.
 fn node(grid: &Grid, idx: usize) -> String {
+    if idx == ELSEWHERE {
+        return "a node of another process".into();
+    }
     let ((i, j, k), p) = node_at(grid, idx);
+    let k = k + grid.k0;
     if grid.dim == 2 {
         format!("node ({i}, {j}) at x = ({:.4}, {:.4})", p[0], p[1])
     } else {
@@ -377,6 +412,9 @@ fn node(grid: &Grid, idx: usize) -> String {
 
 /// The grid node `idx`, and the nearest body's surface with the distance to it in cells.
 fn place(grid: &Grid, idx: usize, bodies: &Bodies) -> String {
+    if idx == ELSEWHERE {
+        return node(grid, idx);
+    }
     let x = glam::DVec3::from_array(node_at(grid, idx).1);
     let nearest = bodies
         .iter()
@@ -433,6 +471,7 @@ impl Diagnostics {
 }
 
 /// Measure the initial state and choose the first step (run once before the first step).
+#[allow(clippy::too_many_arguments)]
 pub fn diagnostics_init(
     grid: Res<Grid>,
     params: Res<Params>,
@@ -441,8 +480,9 @@ pub fn diagnostics_init(
     mut time: ResMut<SimTime>,
     mut diag: ResMut<Diagnostics>,
     mut failure: ResMut<Failure>,
+    split: Option<Res<Decomposition>>,
 ) {
-    let (mut s, at) = diag.measure(&grid, &fields);
+    let (mut s, at) = diag.measure(&grid, &fields, split.as_deref());
     s.t = time.t;
     diag.omega0 = s.max_omega;
     if let Some(i) = at.nan_at {
@@ -471,6 +511,7 @@ fn rest_speed_limit(grid: &Grid, params: &Params, omega0: f64) -> Option<f64> {
 }
 
 /// The diagnostics system: closes the step.
+#[allow(clippy::too_many_arguments)]
 pub fn diagnostics(
     grid: Res<Grid>,
     params: Res<Params>,
@@ -479,12 +520,13 @@ pub fn diagnostics(
     mut time: ResMut<SimTime>,
     mut diag: ResMut<Diagnostics>,
     mut failure: ResMut<Failure>,
+    split: Option<Res<Decomposition>>,
 ) {
     time.t += time.dt;
     time.step += 1;
     // Fields no system changed since the last measure (a vacuum run's) measure the same.
     let (mut s, at) = if fields.is_changed() {
-        diag.measure(&grid, &fields)
+        diag.measure(&grid, &fields, split.as_deref())
     } else {
         (diag.sample, Extremes::default())
     };

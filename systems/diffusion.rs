@@ -97,6 +97,7 @@ pub fn diffusion(
     mut fields: ResMut<Fields>,
     mut spectral: ResMut<Spectral>,
     mut gsd: ResMut<GridScaleDissipation>,
+    split: Option<Res<crate::parallel::Decomposition>>,
 ) {
     let three_d = fields.omega().len() == 3;
     let momentum = params.momentum_form();
@@ -105,7 +106,10 @@ pub fn diffusion(
     }
     let damp = if three_d || momentum {
         TopDamping {
-            strength: grid_scale_rate(crate::solvers::max_norm(fields.omega())) * time.dt,
+            strength: grid_scale_rate(crate::parallel::global_max(
+                split.as_deref(),
+                crate::solvers::max_norm(fields.omega()),
+            )) * time.dt,
             order: ORDER,
         }
     } else {
@@ -130,7 +134,12 @@ impl crate::schedule::Plugin for DiffusionPlugin {
 
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
-        ctx.share_resource(|w| Spectral::new(w.resource::<crate::base::grid::Grid>()));
+        ctx.share_resource(|w| {
+            Spectral::of_grid(
+                w.resource::<crate::base::grid::Grid>(),
+                w.get_resource::<crate::parallel::Decomposition>(),
+            )
+        });
         if ctx.mode().fluid() {
             ctx.insert_resource(GridScaleDissipation::default());
             ctx.checkpoint_resource::<GridScaleDissipation>("grid_scale_dissipation", 1)?;

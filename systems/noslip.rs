@@ -532,7 +532,12 @@ impl crate::schedule::Plugin for NoSlipPlugin {
             return Ok(());
         }
         ctx.share_resource(|w| NoSlip::new(w.resource::<Grid>()));
-        ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
+        ctx.share_resource(|w| {
+            Spectral::of_grid(
+                w.resource::<crate::base::grid::Grid>(),
+                w.get_resource::<crate::parallel::Decomposition>(),
+            )
+        });
         ctx.add_startup_system_in(
             PhysicsSet::NoSlip,
             "noslip_init",

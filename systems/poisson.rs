@@ -56,7 +56,12 @@ impl crate::schedule::Plugin for PoissonPlugin {
 
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
-        ctx.share_resource(|w| Spectral::new(w.resource::<crate::base::grid::Grid>()));
+        ctx.share_resource(|w| {
+            Spectral::of_grid(
+                w.resource::<crate::base::grid::Grid>(),
+                w.get_resource::<crate::parallel::Decomposition>(),
+            )
+        });
         ctx.add_startup_system_in(PhysicsSet::Poisson, "poisson", poisson)?;
         let momentum = ctx.world.resource::<Params>().momentum_form();
         if ctx.mode().fluid() && momentum {

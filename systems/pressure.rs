@@ -638,7 +638,12 @@ impl crate::schedule::Plugin for PressurePlugin {
         let mode = ctx.mode();
         let coupling = ctx.world.resource::<Params>().numerics.body_coupling;
         if mode.fluid() && mode.has_bodies() && coupling == BodyCoupling::Pressure {
-            ctx.share_resource(|w| Spectral::new(w.resource::<Grid>()));
+            ctx.share_resource(|w| {
+                Spectral::of_grid(
+                    w.resource::<crate::base::grid::Grid>(),
+                    w.get_resource::<crate::parallel::Decomposition>(),
+                )
+            });
             ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
             let grid = ctx.world.resource::<Grid>().clone();
             let multigrid = ctx.world.resource::<Params>().multigrid;

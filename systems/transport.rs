@@ -86,6 +86,7 @@ use crate::base::kernels::heaviside;
 use crate::base::pool::Pool;
 use crate::bodies::BodyFields;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
+use crate::parallel::{Decomposition, Transpose, global_max};
 use crate::solvers::carry::{CarryPool, CarryScratch, NEAR_CELLS, Near, carry_sweep};
 use crate::solvers::sweep::{LinePool, LineScratch, split_axes, sweep};
 use bevy_ecs::prelude::*;
@@ -98,17 +99,106 @@ pub struct TransportScratch {
     pool: LinePool,
     /// Whether the next step sweeps axes in reverse order.
     reverse: bool,
+    /// On several processes: the halo and transposes of the slab.
+    split: Option<SplitScratch>,
+}
+
+/// The transport of a slab ([`Grid::slab`]): the velocity with [`R`] ghost planes on each side
+/// for the stretching's differences along z, and the z sweep run on whole lines along z, in the
+/// row layout ([`Transpose`]), where each line is one process's and the sweep is the one-process
+/// code unchanged: the particles of a line then move and remesh exactly as on one process.
+struct SplitScratch {
+    d: Decomposition,
+    /// The velocity's components on the slab's planes and R ghost planes each side.
+    u_ghost: Vec<Vec<f64>>,
+    transpose: Transpose,
+    /// The vorticity's components and the velocity's z component in the row layout.
+    rows: Vec<Vec<f64>>,
+    /// The transpose's scratch.
+    packed: Vec<f64>,
+    /// The grid of the row layout: this process's y rows, every z.
+    rows_grid: Grid,
+}
+
+impl SplitScratch {
+    fn new(grid: &Grid, d: &Decomposition) -> Self {
+        let transpose = Transpose::new(&d.slabs, grid.n[0]);
+        let rows = d.slabs.my_rows();
+        let whole = grid.whole();
+        let mut origin = whole.origin;
+        origin[1] += rows.start as f64 * grid.h;
+        SplitScratch {
+            d: d.clone(),
+            u_ghost: vec![vec![0.0; grid.plane() * (grid.n[2] + 2 * R)]; 3],
+            rows: vec![vec![0.0; transpose.rows_len()]; 4],
+            packed: vec![0.0; transpose.slab_len()],
+            transpose,
+            rows_grid: Grid::new([grid.n[0], rows.len(), whole.n[2]], grid.h, origin),
+        }
+    }
+
+    /// Fills `u_ghost` from the slab's velocity and its neighbours' planes.
+    fn fill_ghosts(&mut self, u: &[Vec<f64>]) {
+        for (g, c) in self.u_ghost.iter_mut().zip(u) {
+            let plane = (g.len() - c.len()) / (2 * R);
+            let (below, rest) = g.split_at_mut(R * plane);
+            let (mid, above) = rest.split_at_mut(c.len());
+            mid.copy_from_slice(c);
+            let (first, last) = (&c[..R * plane], &c[c.len() - R * plane..]);
+            self.d
+                .comm
+                .exchange(&self.d.slabs, first, last, below, above);
+        }
+    }
+
+    /// The sweep along z of the slab's vorticity with the velocity's z component `uz`, on
+    /// whole lines.
+    #[allow(clippy::too_many_arguments)]
+    fn sweep_z(
+        &mut self,
+        dt: f64,
+        omega: &mut [Vec<f64>],
+        uz: &[f64],
+        cutoff: f64,
+        kernel: crate::base::params::RemeshKernel,
+        pool: &LinePool,
+    ) {
+        let comm = &*self.d.comm;
+        let nc = omega.len();
+        for (c, w) in omega.iter().enumerate() {
+            self.transpose
+                .forward(comm, w, &mut self.packed, &mut self.rows[c]);
+        }
+        self.transpose
+            .forward(comm, uz, &mut self.packed, &mut self.rows[3]);
+        let (w_rows, u_rows) = self.rows.split_at_mut(nc);
+        sweep(
+            &self.rows_grid,
+            2,
+            dt,
+            w_rows,
+            &u_rows[u_rows.len() - 1],
+            cutoff,
+            kernel,
+            pool,
+        );
+        for (c, w) in omega.iter_mut().enumerate() {
+            self.transpose
+                .backward(comm, &self.rows[c], &mut self.packed, w);
+        }
+    }
 }
 
 impl TransportScratch {
-    /// Scratch for `grid`.
-    pub fn new(grid: &Grid) -> Self {
-        let nmax = *grid.n.iter().max().unwrap_or(&1);
+    /// Scratch for `grid`, a slab of `split`'s when the run is split.
+    pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
+        let nmax = *grid.n.iter().chain([&grid.nz_whole]).max().unwrap_or(&1);
         let nc = grid.omega_components();
         let pool = Pool::per_thread(move || LineScratch::new(nmax, nc));
         TransportScratch {
             pool,
             reverse: false,
+            split: split.map(|d| SplitScratch::new(grid, d)),
         }
     }
 }
@@ -131,10 +221,11 @@ pub fn transport(
     time: Res<SimTime>,
     mut fields: ResMut<Fields>,
     mut scratch: ResMut<TransportScratch>,
+    split: Option<Res<Decomposition>>,
 ) {
     let dt = time.dt;
     let fields = &mut *fields;
-    let max_omega = crate::solvers::max_norm(fields.omega());
+    let max_omega = global_max(split.as_deref(), crate::solvers::max_norm(fields.omega()));
     let cutoff = params.numerics.remesh_cutoff * max_omega;
     let scratch = &mut *scratch;
     let a = if params.numerics.experimental.midpoint_velocity && fields.dt_prev > 0.0 {
@@ -147,26 +238,33 @@ pub fn transport(
     let (omega, u, u_prev) = fields.transport_parts();
     mid_step_velocity(u, u_prev, a);
     let u = &*u;
-    if grid.dim == 3 && !scratch.reverse {
-        stretch(&grid, dt, omega, u);
+    let kernel = params.numerics.experimental.remesh_kernel;
+    let TransportScratch {
+        pool,
+        reverse,
+        split,
+    } = &mut *scratch;
+    if let Some(sp) = split.as_mut() {
+        sp.fill_ghosts(u);
     }
-    let axes = split_axes(grid.dim, scratch.reverse);
+    let stretch_now = |omega: &mut [Vec<f64>], split: &Option<SplitScratch>| match split {
+        Some(sp) => stretch_ghosted(&grid, dt, omega, &sp.u_ghost, R),
+        None => stretch(&grid, dt, omega, u),
+    };
+    if grid.dim == 3 && !*reverse {
+        stretch_now(omega, split);
+    }
+    let axes = split_axes(grid.dim, *reverse);
     for &axis in axes {
-        sweep(
-            &grid,
-            axis,
-            dt,
-            omega,
-            &u[axis],
-            cutoff,
-            params.numerics.experimental.remesh_kernel,
-            &scratch.pool,
-        );
+        match split.as_mut() {
+            Some(sp) if axis == 2 => sp.sweep_z(dt, omega, &u[2], cutoff, kernel, pool),
+            _ => sweep(&grid, axis, dt, omega, &u[axis], cutoff, kernel, pool),
+        }
     }
-    if grid.dim == 3 && scratch.reverse {
-        stretch(&grid, dt, omega, u);
+    if grid.dim == 3 && *reverse {
+        stretch_now(omega, split);
     }
-    scratch.reverse = !scratch.reverse;
+    *reverse = !*reverse;
 }
 
 /// The most cells a particle of the momentum form moves along an axis in one push (the push is
@@ -383,7 +481,23 @@ const STRETCH_COEFFS: [f64; 4] = [4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280
 /// centred differences. Works row by row: the neighbour rows (±1..±R in y and z) are plain
 /// slices, so the inner loop over x is simple indexing.
 pub fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
+    stretch_ghosted(grid, dt, omega, u, 0);
+}
+
+/// [`stretch`] with the velocity given on the grid's planes and `ghost` more on each side (the
+/// neighbouring processes' planes of a slab): its differences along z read them instead of
+/// wrapping round the grid. With `ghost = 0` the grid is periodic in z.
+pub fn stretch_ghosted(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>], ghost: usize) {
     let [nx, ny, nz] = grid.n;
+    assert!(
+        ghost == 0 || ghost >= R,
+        "stretch: {ghost} ghost planes for a reach of {R}"
+    );
+    assert_eq!(
+        u[0].len(),
+        nx * ny * (nz + 2 * ghost),
+        "stretch: velocity length"
+    );
     let plane = nx * ny;
     let c = STRETCH_COEFFS.map(|c| c / grid.h);
     let (o0, rest) = omega.split_at_mut(1);
@@ -398,10 +512,19 @@ pub fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
         .for_each(|(k, ((w0, w1), w2))| {
             for j in 0..ny {
                 let row = |jj: usize, kk: usize| nx * (jj + ny * kk);
-                let r = row(j, k);
+                // The velocity's plane of node plane k.
+                let ku = k + ghost;
+                let r = row(j, ku);
                 // Rows at y-m and y+m, z-m and z+m (m = 1..=R).
-                let ry = offsets().map(|d| row(wrap(j, d, ny), k));
-                let rz = offsets().map(|d| row(j, wrap(k, d, nz)));
+                let ry = offsets().map(|d| row(wrap(j, d, ny), ku));
+                let rz = offsets().map(|d| {
+                    let kk = if ghost == 0 {
+                        wrap(k, d, nz)
+                    } else {
+                        (ku as isize + d) as usize
+                    };
+                    row(j, kk)
+                });
                 let gu = [0, 1, 2].map(|a| rows(&u[a], r, ry, rz, nx));
                 let w = [
                     &mut w0[nx * j..nx * (j + 1)],
@@ -554,7 +677,10 @@ impl crate::schedule::Plugin for TransportPlugin {
 
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
-        let scratch = TransportScratch::new(ctx.world.resource::<Grid>());
+        let scratch = TransportScratch::new(
+            ctx.world.resource::<Grid>(),
+            ctx.world.get_resource::<Decomposition>(),
+        );
         ctx.insert_resource(scratch);
         ctx.checkpoint_part::<TransportScratch>("transport", 1)?;
         let momentum = ctx.world.resource::<Params>().momentum_form();

@@ -33,6 +33,16 @@ const CHECKS: &[Check] = &[
         1e-12,
     ),
     (
+        "taylor_green_matches_whole",
+        |c| checks::simulation_matches_whole(c, checks::TAYLOR_GREEN, 12),
+        1e-12,
+    ),
+    (
+        "vortex_ring_matches_whole",
+        |c| checks::simulation_matches_whole(c, checks::VORTEX_RING, 12),
+        1e-12,
+    ),
+    (
         "halo_planes_are_the_neighbours",
         |c| checks::halo_planes_are_the_neighbours(c, [6, 5, 18]),
         0.0,

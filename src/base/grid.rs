@@ -7,23 +7,68 @@
 use bevy_ecs::prelude::Resource;
 
 /// The computational grid: a resource.
+///
+/// On several processes each holds a slab of whole z-planes ([`Grid::slab`]): `n` counts the
+/// slab's nodes, whose fields are stored and looped over as a grid of their own, while positions
+/// and the box ([`Grid::pos`], [`Grid::extent`]) stay the whole grid's.
 #[derive(Resource, Clone, Debug, PartialEq)]
 pub struct Grid {
     /// 2 or 3.
     pub dim: usize,
-    /// Node counts per axis; `n[2] == 1` in 2D.
+    /// Node counts per axis (of this process's slab, when split); `n[2] == 1` in 2D.
     pub n: [usize; 3],
     /// Grid spacing (the same on every axis), length units.
     pub h: f64,
-    /// Position of node (0, 0, 0).
+    /// Position of node (0, 0, 0) of the whole grid.
     pub origin: [f64; 3],
+    /// The whole grid's first z-plane that this grid's plane 0 is (0 unless a slab).
+    pub k0: usize,
+    /// The whole grid's z-plane count (`n[2]` unless a slab).
+    pub nz_whole: usize,
 }
 
 impl Grid {
     /// A grid of `n` nodes with spacing `h`; `n[2] == 1` makes it 2D.
     pub fn new(n: [usize; 3], h: f64, origin: [f64; 3]) -> Self {
         let dim = if n[2] == 1 { 2 } else { 3 };
-        Grid { dim, n, h, origin }
+        Grid {
+            dim,
+            n,
+            h,
+            origin,
+            k0: 0,
+            nz_whole: n[2],
+        }
+    }
+
+    /// The slab of z-planes `planes` of this (whole, 3D) grid.
+    pub fn slab(&self, planes: std::ops::Range<usize>) -> Self {
+        assert!(
+            self.dim == 3 && self.k0 == 0 && self.nz_whole == self.n[2],
+            "grid: a slab of a slab or of a 2D grid"
+        );
+        assert!(
+            !planes.is_empty() && planes.end <= self.n[2],
+            "grid: planes {planes:?}"
+        );
+        Grid {
+            dim: 3,
+            n: [self.n[0], self.n[1], planes.len()],
+            h: self.h,
+            origin: self.origin,
+            k0: planes.start,
+            nz_whole: self.nz_whole,
+        }
+    }
+
+    /// The whole grid this one is a slab of (itself unless a slab).
+    pub fn whole(&self) -> Self {
+        Grid::new([self.n[0], self.n[1], self.nz_whole], self.h, self.origin)
+    }
+
+    /// Whether this is a slab of a larger grid.
+    pub fn is_slab(&self) -> bool {
+        self.n[2] != self.nz_whole
     }
 
     /// Total number of nodes.
@@ -51,7 +96,7 @@ impl Grid {
             self.origin[0] + i as f64 * self.h,
             self.origin[1] + j as f64 * self.h,
             if self.dim == 3 {
-                self.origin[2] + k as f64 * self.h
+                self.origin[2] + (k + self.k0) as f64 * self.h
             } else {
                 0.0
             },
@@ -59,19 +104,20 @@ impl Grid {
     }
 
     /// Index along `axis` of the node nearest to coordinate `x`, wrapped periodically into
-    /// `0..n[axis]` (a non-finite `x` gives 0).
+    /// `0..n[axis]` (a non-finite `x` gives 0). Of a whole grid only.
     pub fn nearest(&self, axis: usize, x: f64) -> usize {
+        debug_assert!(!self.is_slab(), "grid: nearest node of a slab");
         let n = self.n[axis] as i64;
         (((x - self.origin[axis]) / self.h).round() as i64).rem_euclid(n) as usize
     }
 
-    /// Box size per axis (`n h`); 0 for z in 2D.
+    /// Box size per axis (`n h` of the whole grid); 0 for z in 2D.
     pub fn extent(&self) -> [f64; 3] {
         [
             self.n[0] as f64 * self.h,
             self.n[1] as f64 * self.h,
             if self.dim == 3 {
-                self.n[2] as f64 * self.h
+                self.nz_whole as f64 * self.h
             } else {
                 0.0
             },

@@ -153,6 +153,14 @@ pub fn status(
             checkpoint_wall,
             restart,
         } => {
+            // Under mpirun, the processes of the run (kept until it ends).
+            let procs = match crate::parallel::comm::launched() {
+                Ok(p) => p,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    return 2;
+                }
+            };
             let opts = crate::run::RunOptions {
                 out,
                 until,
@@ -161,6 +169,7 @@ pub fn status(
                 checkpoint_every,
                 checkpoint_wall,
                 plugins,
+                comm: procs.as_ref().map(|p| p.comm.clone()),
             };
             run::run(scene.as_deref(), restart.as_deref(), &opts)
         }

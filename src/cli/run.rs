@@ -18,6 +18,11 @@ pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> u
     if let Err(e) = install_interrupt_handler() {
         eprintln!("warning: {e:#}");
     }
+    let split = opts.comm.as_ref().is_some_and(|c| c.size() > 1);
+    if split && restart.is_some() {
+        eprintln!("error: restarting on several processes: not yet (restart on one process)");
+        return 2;
+    }
     let result = match (restart, loaded) {
         (Some(ck), loaded) => restart_run(ck, scene.zip(loaded), opts),
         (None, Some(scene)) => run_scene(scene, opts),
@@ -25,7 +30,9 @@ pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> u
     };
     match result {
         Ok(s) => {
-            print_summary(&s);
+            if opts.comm.as_ref().is_none_or(|c| c.is_root()) {
+                print_summary(&s);
+            }
             0
         }
         Err(e) if e.downcast_ref::<Interrupted>().is_some() => {

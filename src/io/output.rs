@@ -338,6 +338,19 @@ fn check_fields(grid: &Grid, fields: &[VtkField]) -> io::Result<()> {
     Ok(())
 }
 
+/// The whole grid's extent and `grid`'s (a slab's planes, [`Grid::slab`], are a piece of the
+/// whole), as VTK writes them: "i0 i1 j0 j1 k0 k1", inclusive node indices.
+pub fn extents(grid: &Grid) -> (String, String) {
+    let [nx, ny, nz] = grid.n;
+    let (k0, k1, kw) = if grid.dim == 3 {
+        (grid.k0, grid.k0 + nz - 1, grid.nz_whole - 1)
+    } else {
+        (0, 0, 0)
+    };
+    let xy = format!("0 {} 0 {}", nx.saturating_sub(1), ny.saturating_sub(1));
+    (format!("{xy} 0 {kw}"), format!("{xy} {k0} {k1}"))
+}
+
 /// The XML of a `.vti` file up to the `_` that starts the appended data: arrays of type `ty`
 /// at `offsets`, with the zlib compressor named when `compressed`.
 fn vti_head(
@@ -349,16 +362,8 @@ fn vti_head(
     compressed: bool,
 ) -> String {
     let out_comps = |f: &VtkField| if f.components.len() == 1 { 1 } else { 3 };
-    let [nx, ny, nz] = grid.n;
-    let three_d = grid.dim == 3;
-    let ez = if three_d { nz.saturating_sub(1) } else { 0 };
-    let extent = format!(
-        "0 {} 0 {} 0 {}",
-        nx.saturating_sub(1),
-        ny.saturating_sub(1),
-        ez
-    );
-    let oz = if three_d { grid.origin[2] } else { 0.0 };
+    let (whole_extent, extent) = extents(grid);
+    let oz = if grid.dim == 3 { grid.origin[2] } else { 0.0 };
     let h = fmt_f64(grid.h);
 
     let mut head = String::new();
@@ -373,7 +378,7 @@ fn vti_head(
     head.push_str(">\n");
     let _ = writeln!(
         head,
-        "  <ImageData WholeExtent=\"{extent}\" Origin=\"{} {} {}\" Spacing=\"{h} {h} {h}\">",
+        "  <ImageData WholeExtent=\"{whole_extent}\" Origin=\"{} {} {}\" Spacing=\"{h} {h} {h}\">",
         fmt_f64(grid.origin[0]),
         fmt_f64(grid.origin[1]),
         fmt_f64(oz)
@@ -410,6 +415,65 @@ fn vti_head(
     head.push_str("  </ImageData>\n");
     head.push_str("  <AppendedData encoding=\"raw\">\n   _");
     head
+}
+
+/// Writes the index of a dataset written in pieces (`.pvti`, VTK's parallel ImageData): the
+/// whole grid, the arrays of `fields` (as [`write_vti_compressed`] writes them in
+/// `precision`), and each piece's extent and file (relative to the index's directory).
+pub fn write_pvti(
+    path: &Path,
+    whole: &Grid,
+    fields: &[VtkField],
+    precision: Precision,
+    pieces: &[(String, String)],
+) -> io::Result<()> {
+    let ty = match precision {
+        Precision::Single => "Float32",
+        Precision::Double => "Float64",
+    };
+    let out_comps = |f: &VtkField| if f.components.len() == 1 { 1 } else { 3 };
+    let (whole_extent, _) = extents(whole);
+    let h = fmt_f64(whole.h);
+    let mut x = String::new();
+    x.push_str("<?xml version=\"1.0\"?>\n");
+    x.push_str(
+        "<VTKFile type=\"PImageData\" version=\"1.0\" byte_order=\"LittleEndian\" \
+         header_type=\"UInt64\">\n",
+    );
+    let _ = writeln!(
+        x,
+        "  <PImageData WholeExtent=\"{whole_extent}\" GhostLevel=\"0\" Origin=\"{} {} {}\" \
+         Spacing=\"{h} {h} {h}\">",
+        fmt_f64(whole.origin[0]),
+        fmt_f64(whole.origin[1]),
+        fmt_f64(if whole.dim == 3 { whole.origin[2] } else { 0.0 })
+    );
+    x.push_str("    <PPointData");
+    if let Some(f) = fields.iter().find(|f| out_comps(f) == 1) {
+        let _ = write!(x, " Scalars=\"{}\"", xml_escape(f.name));
+    }
+    if let Some(f) = fields.iter().find(|f| out_comps(f) == 3) {
+        let _ = write!(x, " Vectors=\"{}\"", xml_escape(f.name));
+    }
+    x.push_str(">\n");
+    for f in fields {
+        let _ = writeln!(
+            x,
+            "      <PDataArray type=\"{ty}\" Name=\"{}\" NumberOfComponents=\"{}\"/>",
+            xml_escape(f.name),
+            out_comps(f)
+        );
+    }
+    x.push_str("    </PPointData>\n");
+    for (extent, file) in pieces {
+        let _ = writeln!(
+            x,
+            "    <Piece Extent=\"{extent}\" Source=\"{}\"/>",
+            xml_escape(file)
+        );
+    }
+    x.push_str("  </PImageData>\n</VTKFile>\n");
+    atomic_write(path, x.as_bytes())
 }
 
 /// A ParaView `.pvd` collection indexing a time series of snapshot files.

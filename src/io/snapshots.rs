@@ -689,3 +689,93 @@ fn xdmf_attributes(fields: &[VtkField]) -> Vec<crate::io::xdmf::XdmfAttribute> {
         })
         .collect()
 }
+
+/// Snapshot `count` of a run split over processes ([`crate::parallel::Decomposition`]): every
+/// process writes its slab as a piece, `fields_NNNNNN_R.vti` (R its rank), one plane deeper
+/// than its slab (the first plane of the process above, so the pieces meet without a gap of a
+/// cell; the last process's piece ends with the grid), and rank 0 writes their index,
+/// `fields_NNNNNN.pvti`, the file the run's `fields.pvd` names: ParaView and VTK's
+/// `vtkXMLPImageDataReader` read it as one dataset with the arrays of a one-process run.
+/// Collective: every process calls it at the same snapshot. Returns the index's name (on every
+/// process) and whether this process wrote anything.
+pub fn write_pieces(dir: &Path, count: usize, sim: &Simulation) -> anyhow::Result<String> {
+    use crate::parallel::Decomposition;
+    let d = sim
+        .world
+        .get_resource::<Decomposition>()
+        .expect("pieces: a split run");
+    let grid = sim.grid();
+    let (rank, ranks) = (d.slabs.rank, d.slabs.ranks);
+    let plane = grid.plane();
+    let last = rank + 1 == ranks;
+    let planes = d.slabs.my_planes();
+    let piece_planes = planes.start..planes.end + usize::from(!last);
+    let piece_grid = grid.whole().slab(piece_planes);
+    let index = format!("fields_{count:06}.pvti");
+    let piece_name = |r: usize| format!("fields_{count:06}_{r}.vti");
+    let precision = sim.scene().output.precision;
+    with_fields(sim, |vtk| -> anyhow::Result<()> {
+        // Each component with the plane above appended (exchanged by every process, in the
+        // same order everywhere).
+        let mut deep: Vec<Vec<Vec<f64>>> = Vec::with_capacity(vtk.len());
+        for f in vtk {
+            let mut comps = Vec::with_capacity(f.components.len());
+            for c in f.components.iter() {
+                let (mut below, mut above) = (vec![0.0; plane], vec![0.0; plane]);
+                let (first, top) = (&c[..plane], &c[c.len() - plane..]);
+                d.comm
+                    .exchange(&d.slabs, first, top, &mut below, &mut above);
+                let mut v = Vec::with_capacity(c.len() + plane);
+                v.extend_from_slice(c);
+                if !last {
+                    v.extend_from_slice(&above);
+                }
+                comps.push(v);
+            }
+            deep.push(comps);
+        }
+        let slices: Vec<Vec<&[f64]>> = deep
+            .iter()
+            .map(|comps| comps.iter().map(|v| v.as_slice()).collect())
+            .collect();
+        let fields: Vec<VtkField> = vtk
+            .iter()
+            .zip(&slices)
+            .map(|(f, c)| VtkField {
+                name: f.name,
+                components: c,
+            })
+            .collect();
+        let file = piece_name(rank);
+        write_vti_compressed(
+            &dir.join(&file),
+            &piece_grid,
+            sim.time(),
+            &fields,
+            precision,
+        )
+        .with_context(|| format!("cannot write {file}"))?;
+        if rank == 0 {
+            let pieces: Vec<(String, String)> = (0..ranks)
+                .map(|r| {
+                    let p = d.slabs.planes(r);
+                    let end = if r + 1 == ranks { p.end } else { p.end + 1 };
+                    let g = grid.whole().slab(p.start..end);
+                    (crate::io::output::extents(&g).1, piece_name(r))
+                })
+                .collect();
+            crate::io::output::write_pvti(
+                &dir.join(&index),
+                &grid.whole(),
+                &fields,
+                precision,
+                &pieces,
+            )
+            .with_context(|| format!("cannot write {index}"))?;
+        }
+        Ok(())
+    })?;
+    // The index names every piece: it is complete once they all are.
+    d.comm.barrier();
+    Ok(index)
+}

@@ -279,3 +279,41 @@ impl Mpi {
         Comm::from_mpi(&self.universe.world())
     }
 }
+
+/// The processes `mpirun` started this one among, when there are several: MPI (kept
+/// initialized while this lives) and their communicator.
+pub struct Processes {
+    #[cfg(feature = "mpi")]
+    _mpi: Mpi,
+    /// Every process of the run.
+    pub comm: std::sync::Arc<Comm>,
+}
+
+/// The number of processes the launcher says this one is among (Open MPI's or a PMI
+/// launcher's variables), if any.
+fn launcher_size() -> Option<usize> {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.parse().ok())
+}
+
+/// The processes of this run: `None` on one (not started by `mpirun`, or `-np 1`); an error if
+/// `mpirun` started several and this build has no MPI, or MPI cannot start.
+pub fn launched() -> anyhow::Result<Option<Processes>> {
+    let Some(n) = launcher_size().filter(|&n| n > 1) else {
+        return Ok(None);
+    };
+    #[cfg(feature = "mpi")]
+    {
+        let _ = n;
+        let mpi = Mpi::init()?.ok_or_else(|| anyhow::anyhow!("MPI was already initialized"))?;
+        let comm = std::sync::Arc::new(mpi.world());
+        Ok(Some(Processes { _mpi: mpi, comm }))
+    }
+    #[cfg(not(feature = "mpi"))]
+    anyhow::bail!(
+        "started by mpirun on {n} processes, but this tumble was built without MPI: build it \
+         with `cargo build --release --features mpi` (needs libopenmpi-dev, openmpi-bin and \
+         libclang-dev)"
+    )
+}

@@ -21,9 +21,11 @@
 //! fixed rank count bit-identical to itself.
 
 pub mod comm;
+pub mod decomposition;
 pub mod slabs;
 pub mod transpose;
 
 pub use comm::{Comm, Plain};
+pub use decomposition::{Decomposition, global_max, global_sum};
 pub use slabs::{DecompositionError, Slabs, split};
 pub use transpose::Transpose;

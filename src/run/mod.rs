@@ -13,6 +13,7 @@ use crate::systems::diagnostics::LAND_TOLERANCE;
 use anyhow::Context;
 pub mod csv;
 pub mod outdir;
+pub mod split;
 
 pub use csv::{
     BODIES_HEADER, BodiesCsv, CONTACTS_HEADER, ContactsCsv, SeriesCsv, TIMINGS_HEADER,
@@ -43,6 +44,8 @@ pub struct RunOptions {
     pub checkpoint_wall: Option<f64>,
     /// Plugins beyond the built-in ones (a user's physics; see `tumble::cli::main_with`).
     pub plugins: PluginList,
+    /// The processes the run is split over (`mpirun`; none: one process).
+    pub comm: Option<std::sync::Arc<crate::parallel::Comm>>,
 }
 
 /// What a finished run reports.
@@ -211,6 +214,9 @@ struct Run {
 
 /// Run a scene to its end time (or `opts.until`), writing every output into the run directory.
 pub fn run_scene(scene: ValidScene, opts: &RunOptions) -> anyhow::Result<RunSummary> {
+    if let Some(comm) = opts.comm.as_ref().filter(|c| c.size() > 1) {
+        return split::run_split(scene, opts, comm.clone());
+    }
     let scene = apply_overrides(scene, opts)?;
     check_disk(&scene, &outdir::resolve(&scene, opts)?, opts.force)?;
     let dir = prepare_dir(&scene, opts)?;

@@ -2,11 +2,13 @@
 
 use crate::base::fields::{Failure, Fields, Params, Sample, SimTime, Timings};
 use crate::base::grid::Grid;
+use crate::parallel::{Comm, Decomposition};
 use crate::scene::ValidScene;
 use crate::schedule::{Mode, Plugin, PluginList, PluginSections, Scheduler, StateRecord};
 use crate::sim::init::add_initial;
 use crate::systems::diagnostics::{BodyItem, BodyMotion, Diagnostics};
 use bevy_ecs::prelude::*;
+use std::sync::Arc;
 
 /// A running simulation.
 pub struct Simulation {
@@ -23,6 +25,7 @@ pub struct Simulation {
 pub struct SimulationBuilder {
     scene: ValidScene,
     plugins: PluginList,
+    comm: Option<Arc<Comm>>,
 }
 
 impl SimulationBuilder {
@@ -39,6 +42,14 @@ impl SimulationBuilder {
         self
     }
 
+    /// Run on the processes of `comm`, each holding a slab of the grid ([`Decomposition`]);
+    /// every process builds the simulation with the same scene and steps it in step with the
+    /// others. One process runs as without it.
+    pub fn on_processes(mut self, comm: Arc<Comm>) -> Self {
+        self.comm = Some(comm);
+        self
+    }
+
     /// Check the scene's plugin sections against the plugins, then set up the world (see
     /// [`Simulation::new`]).
     pub fn build(self) -> anyhow::Result<Simulation> {
@@ -46,8 +57,30 @@ impl SimulationBuilder {
         let plugins = with_builtin(&builtin, &self.plugins);
         let sections = self.scene.plugin_sections();
         sections.check(plugins.iter().copied())?;
-        Simulation::with_plugins(self.scene, sections, &plugins)
+        let split = match self.comm {
+            Some(c) if c.size() > 1 => Some(split_scene(&self.scene, c)?),
+            _ => None,
+        };
+        Simulation::with_plugins(self.scene, sections, &plugins, split)
     }
+}
+
+/// The decomposition of `scene`'s grid over the processes of `comm`, or why it cannot run
+/// split (so far: a 3D flow without bodies or free surface).
+fn split_scene(scene: &ValidScene, comm: Arc<Comm>) -> anyhow::Result<Decomposition> {
+    let ranks = comm.size();
+    if !scene.bodies.is_empty() || scene.free_surface.is_some() {
+        anyhow::bail!(
+            "this scene has {}: on several processes tumble runs flows without bodies or free              surface so far (run it on one process, without mpirun, or with -np 1)",
+            if scene.bodies.is_empty() {
+                "a free surface"
+            } else {
+                "bodies"
+            }
+        );
+    }
+    Decomposition::new(&scene.grid(), comm)
+        .map_err(|e| anyhow::anyhow!("cannot split the grid over {ranks} processes: {e}"))
 }
 
 /// The built-in plugins, then `extra`, in the order they are built.
@@ -82,6 +115,7 @@ impl Simulation {
         SimulationBuilder {
             scene,
             plugins: PluginList::default(),
+            comm: None,
         }
     }
 
@@ -89,8 +123,13 @@ impl Simulation {
         scene: ValidScene,
         sections: PluginSections,
         plugins: &[&dyn Plugin],
+        split: Option<Decomposition>,
     ) -> anyhow::Result<Self> {
-        let grid = scene.grid();
+        let whole = scene.grid();
+        let grid = match &split {
+            Some(d) => d.local_grid(&whole),
+            None => whole,
+        };
         let mut world = World::new();
         let mut fields = Fields::new(&grid);
         for init in &scene.initial {
@@ -115,6 +154,9 @@ impl Simulation {
         }
         crate::sim::build::spawn_free_surface(&mut world, &scene, &grid)?;
         world.insert_resource(grid);
+        if let Some(d) = split {
+            world.insert_resource(d);
+        }
         let mode = Mode {
             vacuum: scene.vacuum,
             bodies: n_bodies,

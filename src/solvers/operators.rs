@@ -10,7 +10,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 use crate::base::grid::Grid;
-use crate::parallel::{Comm, DecompositionError};
+use crate::parallel::{Comm, Decomposition, DecompositionError};
 use crate::solvers::fft::{C64, FftEngine, wavenumber};
 use rayon::prelude::*;
 
@@ -136,6 +136,16 @@ impl Spectral {
     /// it returns are the whole grid's, the same on every process.
     pub fn split(grid: &Grid, comm: Arc<Comm>) -> Result<Self, DecompositionError> {
         Ok(Self::with_engine(grid, FftEngine::split(grid, comm)?))
+    }
+
+    /// The solver of a world's grid: [`Spectral::new`] on one process, [`Spectral::split`] of
+    /// the whole grid when the run is split (`grid` is then this process's slab).
+    pub fn of_grid(grid: &Grid, split: Option<&Decomposition>) -> Self {
+        match split {
+            Some(d) => Self::split(&grid.whole(), d.comm.clone())
+                .expect("spectral: the decomposition was checked when it was made"),
+            None => Self::new(grid),
+        }
     }
 
     fn with_engine(grid: &Grid, fft: FftEngine) -> Self {

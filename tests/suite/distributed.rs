@@ -25,6 +25,15 @@ fn one_process_checks() {
         0.0
     );
     assert_eq!(checks::sums_are_identical_everywhere(solo()), 0.0);
+    // One process runs unsplit: the builder's path with a communicator changes nothing.
+    assert_eq!(
+        checks::simulation_matches_whole(solo(), checks::TAYLOR_GREEN, 2),
+        0.0
+    );
+    assert_eq!(
+        checks::simulation_matches_whole(solo(), checks::VORTEX_RING, 2),
+        0.0
+    );
 }
 
 /// On one process the split engine's transposes are copies: its spectrum and inverse are the
