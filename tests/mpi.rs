@@ -3,12 +3,15 @@
 //! Started by `cargo test`, this binary starts itself under `mpirun`, on 2 processes and on 3
 //! (slabs of unequal thickness), and passes if every process of both runs does. Under `mpirun`
 //! it runs the checks of `tests/distributed/checks.rs` (the suite runs the same checks on one
-//! process), each against the whole computation done on every process.
+//! process), each against the whole computation done on every process. Then `tumble run` itself
+//! (`tests/distributed/run.rs`): a scene run by `mpirun -np 2` and `-np 3` gives the
+//! one-process run's `series.csv` and snapshots.
 
 #[path = "distributed/checks.rs"]
 mod checks;
+#[path = "distributed/run.rs"]
+mod run;
 
-use std::process::Command;
 use std::sync::Arc;
 
 use tumble::parallel::comm::Mpi;
@@ -65,13 +68,7 @@ fn main() {
     let exe = std::env::current_exe().expect("test binary path");
     let (mut passed, mut failed) = (0, 0);
     for np in [2, 3] {
-        let mut cmd = Command::new("mpirun");
-        // Three processes on a two-core machine; a root shell (CI) needs Open MPI's consent.
-        cmd.args(["--oversubscribe", "-np", &np.to_string()]);
-        // SAFETY: geteuid has no preconditions.
-        if unsafe { libc::geteuid() } == 0 {
-            cmd.arg("--allow-run-as-root");
-        }
+        let mut cmd = run::mpirun(np);
         cmd.arg(&exe);
         let status = cmd.status().unwrap_or_else(|e| {
             panic!("cannot start mpirun ({e}): install Open MPI (openmpi-bin, libopenmpi-dev)")
@@ -81,6 +78,13 @@ fn main() {
         } else {
             println!("mpirun -np {np}: failed ({status})");
             failed += CHECKS.len();
+        }
+    }
+    match run::run_matches_one_process() {
+        Ok(()) => passed += 1,
+        Err(e) => {
+            println!("tumble run under mpirun: FAILED: {e}");
+            failed += 1;
         }
     }
     println!(

@@ -274,19 +274,23 @@ impl Mpi {
         Ok(Some(Mpi { universe }))
     }
 
-    /// The communicator of every process of the run.
+    /// The communicator of every process of the run (`MPI_COMM_WORLD` itself, which outlives
+    /// every [`Comm`] made of it: nothing is freed after MPI is finalized).
     pub fn world(&self) -> Comm {
-        Comm::from_mpi(&self.universe.world())
+        Comm {
+            inner: Inner::Mpi(self.universe.world()),
+            gathered: Mutex::new(Vec::new()),
+        }
     }
 }
 
 /// The processes `mpirun` started this one among, when there are several: MPI (kept
 /// initialized while this lives) and their communicator.
 pub struct Processes {
-    #[cfg(feature = "mpi")]
-    _mpi: Mpi,
     /// Every process of the run.
     pub comm: std::sync::Arc<Comm>,
+    #[cfg(feature = "mpi")]
+    _mpi: Mpi,
 }
 
 /// The number of processes the launcher says this one is among (Open MPI's or a PMI
@@ -308,7 +312,7 @@ pub fn launched() -> anyhow::Result<Option<Processes>> {
         let _ = n;
         let mpi = Mpi::init()?.ok_or_else(|| anyhow::anyhow!("MPI was already initialized"))?;
         let comm = std::sync::Arc::new(mpi.world());
-        Ok(Some(Processes { _mpi: mpi, comm }))
+        Ok(Some(Processes { comm, _mpi: mpi }))
     }
     #[cfg(not(feature = "mpi"))]
     anyhow::bail!(

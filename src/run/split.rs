@@ -26,11 +26,11 @@ use crate::scene::{OutputFormat, ValidScene};
 use crate::sim::engine::Simulation;
 use crate::systems::diagnostics::LAND_TOLERANCE;
 
-/// What a split run cannot do yet, if the scene or the options ask for it.
+/// What a split run cannot do yet, if the scene or the options ask for it. (The wall-clock
+/// checkpoints every run has by default are not written: the log says so.)
 fn unsupported(scene: &ValidScene, opts: &RunOptions) -> Option<&'static str> {
     let o = &scene.output;
     if o.checkpoint_every.is_some()
-        || o.checkpoint_wall.is_some_and(|w| w > 0.0)
         || opts.checkpoint_every.is_some()
         || opts.checkpoint_wall.is_some_and(|w| w > 0.0)
     {
@@ -50,7 +50,7 @@ pub fn run_split(
 ) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
     let scene = apply_overrides(scene, opts)?;
-    if let Some(what) = unsupported(&scene, &opts_without_wall(opts)) {
+    if let Some(what) = unsupported(&scene, opts) {
         anyhow::bail!(
             "{what} on several processes: not yet (run on one process, or switch {what} off in \
              the scene's output section)"
@@ -97,6 +97,7 @@ pub fn run_split(
             rayon::current_num_threads(),
             dir.display()
         );
+        tracing::info!("no checkpoints: a run on several processes writes none yet");
         atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
             .context("cannot write scene.ron")?;
     }
@@ -106,15 +107,6 @@ pub fn run_split(
     }
     drop(log);
     result
-}
-
-/// The checkpoint options without the default wall-clock checkpoints of a long run (which a
-/// split run does not write: it says so in the log instead).
-fn opts_without_wall(opts: &RunOptions) -> RunOptions {
-    RunOptions {
-        checkpoint_wall: opts.checkpoint_wall.filter(|&w| w > 0.0),
-        ..opts.clone()
-    }
 }
 
 fn drive_split(

@@ -115,11 +115,13 @@ pub fn read_vti(path: &Path) -> io::Result<VtiData> {
         }
     };
 
+    // The points are the piece's (the whole grid's, unless the file is a piece of a `.pvti`).
+    let piece_extent: [usize; 6] = nums(element("Piece")?, "Extent")?;
     let mut npts = 1usize;
     for a in 0..3 {
-        let (lo, hi) = (whole_extent[2 * a], whole_extent[2 * a + 1]);
-        if hi < lo {
-            return Err(bad("empty WholeExtent"));
+        let (lo, hi) = (piece_extent[2 * a], piece_extent[2 * a + 1]);
+        if hi < lo || lo < whole_extent[2 * a] || hi > whole_extent[2 * a + 1] {
+            return Err(bad("empty piece, or a piece outside the WholeExtent"));
         }
         npts *= hi - lo + 1;
     }

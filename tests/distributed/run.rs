@@ -1,0 +1,179 @@
+//! `tumble run` under `mpirun` against the same run on one process.
+
+#[path = "../suite/vti.rs"]
+#[allow(dead_code)]
+mod vti;
+
+use std::f64::consts::{PI, TAU};
+use std::path::Path;
+use std::process::Command;
+
+/// `mpirun -np N`, oversubscribed (three processes on a two-core machine), with Open MPI's
+/// consent to run as root (CI's shell).
+pub fn mpirun(np: usize) -> Command {
+    let mut cmd = Command::new("mpirun");
+    cmd.args(["--oversubscribe", "-np", &np.to_string()]);
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } == 0 {
+        cmd.arg("--allow-run-as-root");
+    }
+    cmd
+}
+
+/// A Taylor-Green vortex at 24 x 20 x 36 with three snapshots, in double precision.
+const SCENE: &str = r#"Scene(
+    name: "tg",
+    domain: (extent: [6.283185307179586, 5.235987755982989, 9.42477796076938], cells: [24, 20, 36]),
+    fluid: (viscosity: 0.000625),
+    numerics: (dt: Adaptive(c: 0.5, dt_max: 0.1), end_time: 0.6),
+    initial: [TaylorGreen3d(amplitude: 1.0, wavenumber: 1.0)],
+    output: (every: 0.3, precision: Double),
+)"#;
+
+/// The box's volume.
+const VOLUME: f64 = TAU * (5.0 * PI / 3.0) * (3.0 * PI);
+
+/// `tumble run` on one process and under `mpirun -np 2` and `-np 3`: the same time series to
+/// 1e-12 (the circulation, zero up to round-off, against max|ω| times the volume), and the same
+/// snapshot arrays to 1e-12 of their largest value, read back from the pieces the `.pvti`
+/// names.
+pub fn run_matches_one_process() -> Result<(), String> {
+    let tumble = env!("CARGO_BIN_EXE_tumble");
+    let dir = std::env::temp_dir().join(format!("tumble-mpi-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let scene = dir.join("tg.ron");
+    std::fs::write(&scene, SCENE).map_err(|e| e.to_string())?;
+    let run = |cmd: Option<Command>, out: &str| -> Result<(), String> {
+        let mut cmd = match cmd {
+            Some(mut c) => {
+                c.arg(tumble);
+                c
+            }
+            None => Command::new(tumble),
+        };
+        let st = cmd
+            .args(["run", "--quiet", "--out", out])
+            .arg(&scene)
+            .current_dir(&dir)
+            .status()
+            .map_err(|e| e.to_string())?;
+        st.success()
+            .then_some(())
+            .ok_or(format!("{out}: tumble run failed ({st})"))
+    };
+    run(None, "one")?;
+    let series = |out: &str| -> Result<Vec<Vec<f64>>, String> {
+        let text = std::fs::read_to_string(dir.join(out).join("series.csv"))
+            .map_err(|e| format!("{out}/series.csv: {e}"))?;
+        text.lines()
+            .skip(1)
+            .map(|l| {
+                l.split(',')
+                    .map(|v| v.parse().map_err(|e| format!("{out}/series.csv: {v}: {e}")))
+                    .collect()
+            })
+            .collect()
+    };
+    let one = series("one")?;
+    for np in [2, 3] {
+        let out = format!("np{np}");
+        run(Some(mpirun(np)), &out)?;
+        let many = series(&out)?;
+        if many.len() != one.len() {
+            return Err(format!(
+                "{out}: {} rows, one process {}",
+                many.len(),
+                one.len()
+            ));
+        }
+        // Columns: t, dt, energy, enstrophy, circulation, max_omega, grid_scale_removed.
+        for (a, b) in one.iter().zip(&many) {
+            for c in 0..a.len() {
+                let d = if c == 4 {
+                    (a[c] - b[c]).abs() / (a[5] * VOLUME)
+                } else {
+                    (a[c] - b[c]).abs() / a[c].abs().max(b[c].abs()).max(1e-300)
+                };
+                if d > 1e-12 {
+                    return Err(format!(
+                        "{out}: series.csv column {c} at t = {}: {d:e}",
+                        a[0]
+                    ));
+                }
+            }
+        }
+        for snap in 0..3 {
+            let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
+                .map_err(|e| e.to_string())?;
+            let pieces = read_pvti(&dir.join(&out).join(format!("fields_{snap:06}.pvti")))?;
+            compare(&whole, &pieces).map_err(|e| format!("{out} snapshot {snap}: {e}"))?;
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// A dataset's point arrays: (name, components, values interleaved per point).
+type Arrays = Vec<(String, usize, Vec<f64>)>;
+
+/// The arrays of a `.pvti` dataset, assembled from its pieces.
+fn read_pvti(path: &Path) -> Result<Arrays, String> {
+    let xml = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let doc = roxmltree::Document::parse(&xml).map_err(|e| e.to_string())?;
+    let ext = |s: &str| -> Vec<usize> { s.split(' ').filter_map(|v| v.parse().ok()).collect() };
+    let top = doc
+        .descendants()
+        .find(|n| n.has_tag_name("PImageData"))
+        .ok_or("no PImageData")?;
+    let w = ext(top.attribute("WholeExtent").ok_or("no WholeExtent")?);
+    let (nx, ny, nz) = (w[1] + 1, w[3] + 1, w[5] + 1);
+    let mut arrays: Arrays = Vec::new();
+    for piece in doc.descendants().filter(|n| n.has_tag_name("Piece")) {
+        let e = ext(piece.attribute("Extent").ok_or("no Extent")?);
+        let src = path.with_file_name(piece.attribute("Source").ok_or("no Source")?);
+        let data = vti::read_vti(&src).map_err(|e| format!("{}: {e}", src.display()))?;
+        for (name, nc, values) in data.arrays {
+            let at = match arrays.iter().position(|a| a.0 == name) {
+                Some(i) => i,
+                None => {
+                    arrays.push((name, nc, vec![f64::NAN; nx * ny * nz * nc]));
+                    arrays.len() - 1
+                }
+            };
+            // The piece's planes e[4]..=e[5], each whole in x and y.
+            let plane = nx * ny * nc;
+            let dst = &mut arrays[at].2[e[4] * plane..(e[5] + 1) * plane];
+            if values.len() != dst.len() {
+                return Err(format!(
+                    "{}: {} values for extent {e:?}",
+                    src.display(),
+                    values.len()
+                ));
+            }
+            dst.copy_from_slice(&values);
+        }
+    }
+    Ok(arrays)
+}
+
+/// The one-process snapshot's arrays against the pieces'.
+fn compare(whole: &vti::VtiData, pieces: &Arrays) -> Result<(), String> {
+    let names: Vec<&str> = whole.arrays.iter().map(|a| a.0.as_str()).collect();
+    let piece_names: Vec<&str> = pieces.iter().map(|a| a.0.as_str()).collect();
+    if names != piece_names {
+        return Err(format!("arrays {names:?} against {piece_names:?}"));
+    }
+    for ((name, _, a), (_, _, b)) in whole.arrays.iter().zip(pieces) {
+        let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let d = a
+            .iter()
+            .zip(b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        // A node no piece covered is NaN: NaN > tolerance is false, so test it apart.
+        if b.iter().any(|v| v.is_nan()) || d > 1e-12 * scale {
+            return Err(format!("{name}: max difference {d:e} of {scale:e}"));
+        }
+    }
+    Ok(())
+}
