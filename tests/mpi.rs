@@ -46,6 +46,11 @@ const CHECKS: &[Check] = &[
         1e-12,
     ),
     (
+        "split_runs_are_bit_identical",
+        |c| checks::split_runs_are_bit_identical(c, checks::VORTEX_RING, 6),
+        0.0,
+    ),
+    (
         "halo_planes_are_the_neighbours",
         |c| checks::halo_planes_are_the_neighbours(c, [6, 5, 18]),
         0.0,

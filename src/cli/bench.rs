@@ -1,10 +1,12 @@
 //! `tumble bench`: the time of a step and of each system, as ratios to the FFT floor.
 
 use crate::io::output::peak_memory_bytes;
+use crate::parallel::Comm;
 use crate::scene::ValidScene;
 use crate::schedule::PluginList;
 use crate::sim::engine::Simulation;
 use std::path::Path;
+use std::sync::Arc;
 
 /// The median and the 90th percentile of `v` (sorted in place).
 fn median_p90(v: &mut [f64]) -> (f64, f64) {
@@ -23,14 +25,29 @@ fn median_p90(v: &mut [f64]) -> (f64, f64) {
 }
 
 /// `tumble bench SCENE`: time steps, print one JSON line.
+///
+/// Under `mpirun` the scene runs split over the processes: a step's time is the slowest
+/// process's, the time in transposes and halo exchanges is reported apart, the FFT floor is
+/// the whole grid's measured by rank 0 alone, and rank 0 prints.
 pub fn bench(path: &Path, steps: usize, warmup: usize, plugins: &PluginList) -> u8 {
     let scene = match super::load(path, plugins) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    match measure(scene, steps, warmup, plugins) {
+    let procs = match crate::parallel::comm::launched() {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return 2;
+        }
+    };
+    let comm = procs.as_ref().map(|p| p.comm.clone());
+    let root = comm.as_ref().is_none_or(|c| c.is_root());
+    match measure(scene, steps, warmup, plugins, comm) {
         Ok(line) => {
-            println!("{line}");
+            if root {
+                println!("{line}");
+            }
             0
         }
         Err(e) => {
@@ -47,6 +64,7 @@ fn measure(
     steps: usize,
     warmup: usize,
     plugins: &PluginList,
+    comm: Option<Arc<Comm>>,
 ) -> anyhow::Result<String> {
     anyhow::ensure!(steps > 0, "--steps must be at least 1");
     // An end time the timed steps never reach (no step is shortened to land on it), yet one
@@ -57,7 +75,12 @@ fn measure(
     };
     let scene = scene.edit(|s| s.numerics.end_time = far)?;
     let name = scene.name.clone();
-    let mut sim = Simulation::builder(scene).add_plugins(plugins).build()?;
+    let mut builder = Simulation::builder(scene).add_plugins(plugins);
+    if let Some(c) = &comm {
+        builder = builder.on_processes(c.clone());
+    }
+    let mut sim = builder.build()?;
+    let comm = comm.as_deref();
     sim.set_stop_at(None);
     for _ in 0..warmup {
         sim.step()?;
@@ -69,10 +92,21 @@ fn measure(
     let mut preconditioners = Vec::new();
     // Iterations of the no-slip solve per timed step (when it runs).
     let mut noslip = Vec::new();
+    // Seconds in transposes and halo exchanges per timed step (several processes).
+    let mut waiting = Vec::new();
+    let processes = comm.map_or(1, |c| c.size());
+    let slowest = |x: f64| comm.map_or(x, |c| c.max_one(x));
     for _ in 0..steps {
+        if let Some(c) = comm {
+            c.barrier();
+        }
+        let w0 = comm.map_or(0.0, |c| c.seconds_communicating());
         let t0 = std::time::Instant::now();
         sim.step()?;
-        total.push(t0.elapsed().as_secs_f64());
+        total.push(slowest(t0.elapsed().as_secs_f64()));
+        if let Some(c) = comm {
+            waiting.push(c.max_one(c.seconds_communicating() - w0));
+        }
         if let Some(p) = sim
             .world
             .get_resource::<crate::systems::pressure::PressureSolver>()
@@ -87,6 +121,7 @@ fn measure(
             noslip.push(n.iterations as f64);
         }
         for &(n, s) in &sim.timings().last {
+            let s = slowest(s);
             match per.iter_mut().find(|e| e.0 == n) {
                 Some(e) => e.1.push(s),
                 None => per.push((n, vec![s])),
@@ -98,11 +133,22 @@ fn measure(
     for (n, mut v) in per {
         systems.insert(n.to_string(), serde_json::json!(median_p90(&mut v).0));
     }
-    let g = sim.grid();
-    // Peak memory of the run, before the floor's own buffers.
-    let peak = peak_memory_bytes();
-    // The FFT floor of the same grid, measured now in this process: the step as a ratio to it.
-    let floor = crate::solvers::fft::floor_seconds(g, 7);
+    let g = &sim.grid().whole();
+    // Peak memory of the run (of the largest process), before the floor's own buffers.
+    let peak = peak_memory_bytes().map(|p| slowest(p as f64) as u64);
+    // The FFT floor of the same grid, measured now in this process (rank 0 alone, the others
+    // waiting): the step as a ratio to it.
+    let floor = match comm {
+        Some(c) => {
+            let f = if c.is_root() {
+                crate::solvers::fft::floor_seconds(g, 7)
+            } else {
+                0.0
+            };
+            c.max_one(f)
+        }
+        None => crate::solvers::fft::floor_seconds(g, 7),
+    };
     let mut floors = serde_json::Map::new();
     for (n, s) in &systems {
         floors.insert(
@@ -124,7 +170,11 @@ fn measure(
         "step_per_fft_floor": med / floor,
         "system_per_fft_floor": floors,
         "peak_memory_bytes": peak,
+        "processes": processes,
     });
+    if !waiting.is_empty() {
+        line["median_s_communicating_per_step"] = serde_json::json!(median_p90(&mut waiting).0);
+    }
     if !iterations.is_empty() {
         line["median_pressure_iterations"] = serde_json::json!(median_p90(&mut iterations).0);
         line["pressure_preconditioners"] = serde_json::json!(preconditioners);

@@ -25,6 +25,8 @@ impl Plain for C64 {}
 /// A group of processes that run one simulation together.
 pub struct Comm {
     inner: Inner,
+    /// Nanoseconds spent in all-to-alls and exchanges with other processes (for `tumble bench`).
+    waited: std::sync::atomic::AtomicU64,
     /// Scratch of the reductions (one value per rank and entry); grows to the longest reduction
     /// once, then is reused.
     gathered: Mutex<Vec<f64>>,
@@ -64,6 +66,7 @@ impl Comm {
         Comm {
             inner: Inner::Solo,
             gathered: Mutex::new(Vec::new()),
+            waited: Default::default(),
         }
     }
 
@@ -74,6 +77,7 @@ impl Comm {
         Comm {
             inner: Inner::Mpi(comm.duplicate()),
             gathered: Mutex::new(Vec::new()),
+            waited: Default::default(),
         }
     }
 
@@ -99,6 +103,19 @@ impl Comm {
                 c.size() as usize
             }
         }
+    }
+
+    /// Seconds this process has spent in all-to-alls and exchanges with other processes (the
+    /// transposes and halos; 0 on one process).
+    pub fn seconds_communicating(&self) -> f64 {
+        self.waited.load(std::sync::atomic::Ordering::Relaxed) as f64 * 1e-9
+    }
+
+    #[cfg(feature = "mpi")]
+    fn count_time(&self, t0: std::time::Instant) {
+        let ns = t0.elapsed().as_nanos() as u64;
+        self.waited
+            .fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Whether this is rank 0 (the one that writes files meant to exist once).
@@ -198,7 +215,9 @@ impl Comm {
                 let (sc, sd, rc, rd) = (i(scount), i(sdispl), i(rcount), i(rdispl));
                 let s = Partition::new(send, &sc[..], &sd[..]);
                 let mut r = PartitionMut::new(recv, &rc[..], &rd[..]);
+                let t0 = std::time::Instant::now();
                 c.all_to_all_varcount_into(&s, &mut r);
+                self.count_time(t0);
             }
         }
     }
@@ -234,8 +253,10 @@ impl Comm {
                     c.process_at_rank(below as i32),
                     c.process_at_rank(above as i32),
                 );
+                let t0 = std::time::Instant::now();
                 send_receive_into(to_below, &pb, from_above, &pa);
                 send_receive_into(to_above, &pa, from_below, &pb);
+                self.count_time(t0);
             }
         }
     }
@@ -280,6 +301,7 @@ impl Mpi {
         Comm {
             inner: Inner::Mpi(self.universe.world()),
             gathered: Mutex::new(Vec::new()),
+            waited: Default::default(),
         }
     }
 }

@@ -34,6 +34,10 @@ fn one_process_checks() {
         checks::simulation_matches_whole(solo(), checks::VORTEX_RING, 2),
         0.0
     );
+    assert_eq!(
+        checks::split_runs_are_bit_identical(solo(), checks::VORTEX_RING, 2),
+        0.0
+    );
 }
 
 /// On one process the split engine's transposes are copies: its spectrum and inverse are the
