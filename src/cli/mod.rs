@@ -71,6 +71,10 @@ enum Command {
     Check {
         /// The scene file (RON).
         scene: PathBuf,
+        /// Also say how the scene would split over this many processes (`mpirun -np N`):
+        /// slabs, memory per process, transposes per step.
+        #[arg(long, value_name = "N")]
+        processes: Option<usize>,
     },
     /// Rerun the validation cases and compare with analytic and published values: the full
     /// tier by default, the quick tier (what `cargo test --release` runs) with --quick.
@@ -173,7 +177,7 @@ pub fn status(
             };
             run::run(scene.as_deref(), restart.as_deref(), &opts)
         }
-        Command::Check { scene } => check(&scene, &plugins),
+        Command::Check { scene, processes } => check(&scene, &plugins, processes),
         Command::Validate {
             cases,
             quick,
@@ -210,7 +214,7 @@ fn set_threads(threads: Option<usize>) -> Option<u8> {
 
 /// `tumble check`: load and validate a scene (its meshes and its plugin sections included),
 /// print what it will compute.
-fn check(path: &Path, plugins: &PluginList) -> u8 {
+fn check(path: &Path, plugins: &PluginList, processes: Option<usize>) -> u8 {
     let scene = match load(path, plugins) {
         Ok(s) => s,
         Err(code) => return code,
@@ -222,6 +226,14 @@ fn check(path: &Path, plugins: &PluginList) -> u8 {
         }
     }
     print!("{}", crate::io::summary::describe(&scene));
+    if let Some(p) = processes {
+        if p == 0 {
+            eprintln!("error: --processes must be at least 1");
+            return 2;
+        }
+        let e = crate::io::estimate::split_estimate(&scene, p);
+        println!("  {}", crate::io::estimate::split_words(&e));
+    }
     println!("scene `{}` is valid", scene.name);
     0
 }

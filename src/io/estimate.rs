@@ -326,3 +326,74 @@ pub fn human_seconds(s: f64) -> String {
         format!("{} days", sig2(s / 86400.0))
     }
 }
+
+/// Doubles per node a process holds besides a one-process run's when the grid is split: the
+/// transport's z sweep in the row layout (three vorticity components and the velocity's z
+/// component) and its send buffer, the velocity's ghost planes (about three components, for
+/// slabs much thicker than the 4 ghost planes a side), and the FFT's planes and send buffer
+/// (two half spectra, about two doubles). Measured: Taylor-Green 128³ on 2 processes held
+/// 204 MB each against 206 MB on one (2026-11-28).
+const SPLIT_DOUBLES_PER_NODE: f64 = 4.0 + 1.0 + 3.0 + 2.0;
+
+/// A scene's cost split over processes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SplitEstimate {
+    /// Processes.
+    pub processes: usize,
+    /// z-planes of the thickest and thinnest slab.
+    pub planes: (usize, usize),
+    /// Peak memory of the process with the thickest slab, bytes.
+    pub bytes_per_process: f64,
+    /// Bytes each process sends in all-to-alls per step (the spectral solves' 9 transposes of
+    /// half spectra and the z sweep's 7 transposes of real fields; the share a process keeps is
+    /// not sent).
+    pub transposed_bytes: f64,
+    /// Why the scene cannot run split over `processes`, if it cannot.
+    pub refused: Option<String>,
+}
+
+/// The estimate for `scene` split over `processes` processes (slabs of z-planes).
+pub fn split_estimate(scene: &ValidScene, processes: usize) -> SplitEstimate {
+    let g = scene.grid();
+    let whole = estimate(scene);
+    let slabs = crate::parallel::Slabs::new(g.n, processes, 0);
+    let planes = (g.n[2].div_ceil(processes), (g.n[2] / processes).max(1));
+    let local = whole.nodes * planes.0 as f64 / g.n[2] as f64;
+    let per_node = (whole.bytes - BASE_BYTES) / whole.nodes;
+    let bytes_per_process = BASE_BYTES + local * (per_node + 8.0 * SPLIT_DOUBLES_PER_NODE);
+    let kept = 1.0 / processes as f64;
+    let nxh = (g.n[0] / 2 + 1) as f64;
+    let half_spectrum = 16.0 * nxh * (local / g.n[0] as f64);
+    let transposed_bytes = (1.0 - kept) * (9.0 * half_spectrum + 7.0 * 8.0 * local);
+    let refused = if !scene.bodies.is_empty() || scene.free_surface.is_some() {
+        Some("bodies and free surfaces run on one process so far".to_string())
+    } else {
+        slabs.err().map(|e| e.to_string())
+    };
+    SplitEstimate {
+        processes,
+        planes,
+        bytes_per_process,
+        transposed_bytes,
+        refused,
+    }
+}
+
+/// The split estimate in words.
+pub fn split_words(e: &SplitEstimate) -> String {
+    if let Some(why) = &e.refused {
+        return format!("on {} processes: cannot split ({why})", e.processes);
+    }
+    let slabs = if e.planes.0 == e.planes.1 {
+        format!("{}", e.planes.0)
+    } else {
+        format!("{} to {}", e.planes.1, e.planes.0)
+    };
+    format!(
+        "on {} processes: slabs of {slabs} z-planes, estimated peak memory {} per process, {} \
+         sent per process per step in transposes",
+        e.processes,
+        crate::io::summary::human_bytes(e.bytes_per_process),
+        crate::io::summary::human_bytes(e.transposed_bytes)
+    )
+}

@@ -336,6 +336,45 @@ fn check_summarises_a_good_scene() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// `tumble check --processes N`: the slabs of a 3D flow (48 planes over 5 processes: 9 or 10
+/// each), and a clear refusal of a 2D scene, with the reason.
+#[test]
+fn check_says_how_a_scene_splits_over_processes() {
+    let d = tmp("check-split");
+    let scene = d.join("box.ron");
+    std::fs::write(
+        &scene,
+        r#"Scene(domain: (extent: [1.0, 1.0, 3.0], cells: [16, 16, 48]), fluid: (viscosity: 0.01),
+    numerics: (end_time: 0.1))"#,
+    )
+    .unwrap();
+    let check = |scene: &std::path::Path, n: &str| {
+        let st = tumble()
+            .args(["check", scene.to_str().unwrap(), "--processes", n])
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        String::from_utf8_lossy(&st.stdout).into_owned()
+    };
+    let out = check(&scene, "5");
+    assert!(
+        out.contains("on 5 processes: slabs of 9 to 10 z-planes"),
+        "{out}"
+    );
+    let flat = d.join("flat.ron");
+    std::fs::write(&flat, SCENE).unwrap();
+    let out = check(&flat, "2");
+    assert!(
+        out.contains("on 2 processes: cannot split (a 2D grid runs on one process"),
+        "{out}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 #[test]
 fn bench_prints_one_json_line() {
     let d = tmp("bench");
