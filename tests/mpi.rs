@@ -85,11 +85,25 @@ fn main() {
             failed += CHECKS.len();
         }
     }
-    match run::run_matches_one_process() {
-        Ok(()) => passed += 1,
-        Err(e) => {
-            println!("tumble run under mpirun: FAILED: {e}");
-            failed += 1;
+    for (name, test) in [
+        (
+            "tumble run under mpirun matches one process",
+            run::run_matches_one_process as fn() -> Result<(), String>,
+        ),
+        (
+            "a killed process, then --restart, is bit-identical",
+            run::killed_and_restarted_is_bit_identical,
+        ),
+    ] {
+        match test() {
+            Ok(()) => {
+                println!("{name}: ok");
+                passed += 1;
+            }
+            Err(e) => {
+                println!("{name}: FAILED: {e}");
+                failed += 1;
+            }
         }
     }
     println!(

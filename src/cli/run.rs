@@ -18,12 +18,11 @@ pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> u
     if let Err(e) = install_interrupt_handler() {
         eprintln!("warning: {e:#}");
     }
-    let split = opts.comm.as_ref().is_some_and(|c| c.size() > 1);
-    if split && restart.is_some() {
-        eprintln!("error: restarting on several processes: not yet (restart on one process)");
-        return 2;
-    }
+    let split = opts.comm.as_ref().filter(|c| c.size() > 1);
     let result = match (restart, loaded) {
+        (Some(ck), _) if split.is_some() => {
+            crate::run::split::restart_split(ck, opts, split.expect("checked").clone())
+        }
         (Some(ck), loaded) => restart_run(ck, scene.zip(loaded), opts),
         (None, Some(scene)) => run_scene(scene, opts),
         (None, None) => unreachable!("clap requires a scene without --restart"),

@@ -157,6 +157,18 @@ pub fn file_name(step: u64) -> String {
     format!("{PREFIX}{step:06}.bin")
 }
 
+/// The file of process `rank` of the checkpoint at `step` of a run split over `ranks`
+/// processes: rank 0's is [`file_name`] (it carries the scene and the run's progress, and is
+/// what `--restart DIR` finds), the others' `checkpoint_NNNNNN.rank{R}of{N}.bin`, each holding
+/// that process's slab of the fields and its systems' state.
+pub fn piece_file_name(step: u64, rank: usize, ranks: usize) -> String {
+    if rank == 0 {
+        file_name(step)
+    } else {
+        format!("{PREFIX}{step:06}.rank{rank}of{ranks}.bin")
+    }
+}
+
 /// The step of a checkpoint file name tumble writes ([`file_name`]), `None` for any other.
 pub fn step_of(name: &str) -> Option<u64> {
     let digits = name.strip_prefix(PREFIX)?.strip_suffix(".bin")?;

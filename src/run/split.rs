@@ -1,24 +1,29 @@
 //! A run split over processes (`mpirun -np N tumble run SCENE`): every process steps its slab
 //! of the grid in step with the others ([`crate::parallel`]); rank 0 makes the run directory
 //! and writes the time series, the log, the plots and the index of each snapshot, and every
-//! process writes its piece of each snapshot ([`crate::io::snapshots::write_pieces`]).
+//! process writes its piece of each snapshot ([`crate::io::snapshots::write_pieces`]) and of
+//! each checkpoint ([`checkpoint::piece_file_name`]: rank 0's is the usual
+//! `checkpoint_NNNNNN.bin`, which carries the scene and the run's progress).
 //!
 //! The clock is the one-process run's: the same output times, landed on the same way, so the
 //! time series are the one-process run's to round-off (the sums over the grid are added in a
-//! different order). Every decision that could differ between processes (an interruption, a
-//! failed step) is taken together.
+//! different order). Every decision that could differ between processes (a wall-clock
+//! checkpoint, an interruption) is taken together. A restart (`mpirun -np N tumble run
+//! --restart DIR`) needs the same number of processes and continues bit for bit.
 //!
-//! Not yet on several processes: checkpoints and restarts, HDF5 output, bodies and free
-//! surfaces (each is refused before anything is written, with the reason).
+//! Not yet on several processes: HDF5 output, bodies and free surfaces (refused before anything
+//! is written, with the reason).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
 
-use super::{Progress, RunOptions, RunSummary, SeriesCsv, add_timings, apply_overrides, plot};
-use crate::io::checkpoint;
+use super::{
+    Progress, RunOptions, RunSummary, SeriesCsv, add_timings, apply_overrides, next_multiple, plot,
+};
+use crate::io::checkpoint::{self, Checkpoint, RunProgress};
 use crate::io::output::{PvdSeries, atomic_write};
 use crate::io::runlog::RunLog;
 use crate::parallel::Comm;
@@ -26,20 +31,31 @@ use crate::scene::{OutputFormat, ValidScene};
 use crate::sim::engine::Simulation;
 use crate::systems::diagnostics::LAND_TOLERANCE;
 
-/// What a split run cannot do yet, if the scene or the options ask for it. (The wall-clock
-/// checkpoints every run has by default are not written: the log says so.)
-fn unsupported(scene: &ValidScene, opts: &RunOptions) -> Option<&'static str> {
-    let o = &scene.output;
-    if o.checkpoint_every.is_some()
-        || opts.checkpoint_every.is_some()
-        || opts.checkpoint_wall.is_some_and(|w| w > 0.0)
-    {
-        return Some("checkpoints");
-    }
-    if o.formats.contains(&OutputFormat::Hdf5) {
-        return Some("HDF5 output");
-    }
-    None
+/// What a split run cannot do yet, if the scene asks for it.
+fn unsupported(scene: &ValidScene) -> Option<&'static str> {
+    scene
+        .output
+        .formats
+        .contains(&OutputFormat::Hdf5)
+        .then_some("HDF5 output")
+}
+
+/// The state of a split run's outputs: rank 0's files, and where every process stands.
+struct Outputs {
+    dir: PathBuf,
+    /// `series.csv` (rank 0).
+    series: Option<SeriesCsv>,
+    /// `fields.pvd` (rank 0, VTK output with fields).
+    pvd: Option<PvdSeries>,
+    /// Whether snapshots have fields to write.
+    vtk: bool,
+    /// Snapshots written.
+    count: usize,
+    next_out: Option<f64>,
+    next_ckpt: Option<f64>,
+    /// (step, rank 0's file) of the latest checkpoint.
+    last_ckpt: Option<(u64, PathBuf)>,
+    since_ckpt: Instant,
 }
 
 /// Run `scene` split over the processes of `comm` (more than one).
@@ -50,11 +66,8 @@ pub fn run_split(
 ) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
     let scene = apply_overrides(scene, opts)?;
-    if let Some(what) = unsupported(&scene, opts) {
-        anyhow::bail!(
-            "{what} on several processes: not yet (run on one process, or switch {what} off in \
-             the scene's output section)"
-        );
+    if let Some(what) = unsupported(&scene) {
+        anyhow::bail!("{what} on several processes: not yet (run on one process)");
     }
     // Rank 0 makes the directory; the others learn whether it could.
     let mut log = None;
@@ -68,40 +81,36 @@ pub fn run_split(
     } else {
         super::outdir::resolve(&scene, opts)
     };
-    let failed = comm.max_one(f64::from(u8::from(prepared.is_err())));
-    let dir = match prepared {
-        Err(e) => return Err(e),
-        Ok(_) if failed > 0.0 => anyhow::bail!("process 0 could not prepare the run directory"),
-        Ok(d) => d,
-    };
+    let dir = agree(&comm, prepared, "prepare the run directory")?;
     let root = comm.is_root();
-    let sim = Simulation::builder(scene.clone())
+    let built = Simulation::builder(scene.clone())
         .add_plugins(&opts.plugins)
         .on_processes(comm.clone())
-        .build()?;
+        .build();
+    let sim = agree(&comm, built, "set the simulation up")?;
     if root {
-        let grid = sim.grid().whole();
-        tracing::info!(
-            "tumble {} run of scene `{}` on {} processes: 3D grid {}x{}x{} (h = {}) in slabs of {} \
-             to {} z-planes, end time {}, {} threads each, output in {}",
-            env!("CARGO_PKG_VERSION"),
-            scene.name,
-            comm.size(),
-            grid.n[0],
-            grid.n[1],
-            grid.n[2],
-            grid.h,
-            grid.n[2] / comm.size(),
-            grid.n[2].div_ceil(comm.size()),
-            scene.numerics.end_time,
-            rayon::current_num_threads(),
-            dir.display()
-        );
-        tracing::info!("no checkpoints: a run on several processes writes none yet");
+        log_start(&sim, &comm, &dir, "run");
         atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
             .context("cannot write scene.ron")?;
     }
-    let result = drive_split(sim, opts, &comm, dir.clone(), wall0);
+    let every = scene.output.every;
+    let end = scene.numerics.end_time;
+    let out = Outputs {
+        series: if root {
+            Some(SeriesCsv::create(&dir.join("series.csv"), &sim)?)
+        } else {
+            None
+        },
+        pvd: (root && vtk(&sim)).then(|| PvdSeries::new(dir.join("fields.pvd"))),
+        vtk: vtk(&sim),
+        count: 0,
+        next_out: every.map(|e| e.min(end)),
+        next_ckpt: scene.output.checkpoint_every,
+        last_ckpt: None,
+        since_ckpt: wall0,
+        dir,
+    };
+    let result = drive_split(sim, opts, &comm, out, wall0, true);
     if let Err(e) = &result {
         tracing::error!("{e:#}");
     }
@@ -109,49 +118,274 @@ pub fn run_split(
     result
 }
 
+/// Continue a split run from its checkpoint `path` (rank 0's file, or the run directory: then
+/// the latest checkpoint of which every process's piece reads back) on the processes of `comm`,
+/// as many as wrote it.
+pub fn restart_split(
+    path: &Path,
+    opts: &RunOptions,
+    comm: Arc<Comm>,
+) -> anyhow::Result<RunSummary> {
+    let wall0 = Instant::now();
+    let (rank, ranks) = (comm.rank(), comm.size());
+    let found = resolve(path, ranks);
+    let (dir, step) = agree(&comm, found, "find the checkpoint")?;
+    let loaded = Checkpoint::load(&dir.join(checkpoint::file_name(step)))
+        .and_then(|c0| {
+            Ok((
+                Checkpoint::load(&dir.join(checkpoint::piece_file_name(step, rank, ranks)))?,
+                c0,
+            ))
+        })
+        .map_err(anyhow::Error::from);
+    let (mine, ck0) = agree(&comm, loaded, "read the checkpoint")?;
+    let scene = apply_overrides(ck0.scene()?, opts)?;
+    let built = Simulation::builder(scene.clone())
+        .add_plugins(&opts.plugins)
+        .on_processes(comm.clone())
+        .build()
+        .and_then(|mut sim| {
+            mine.restore(&mut sim)?;
+            Ok(sim)
+        });
+    let sim = agree(&comm, built, "restore the checkpoint")?;
+    let p = &ck0.progress;
+    let root = comm.is_root();
+    let mut log = None;
+    // Rank 0's files cut back to the checkpoint; every process drops its later checkpoints.
+    let cut: anyhow::Result<Option<SeriesCsv>> = (|| {
+        for (s, _) in checkpoint::list(&dir)?
+            .into_iter()
+            .filter(|(s, _)| *s > step)
+        {
+            let own = dir.join(checkpoint::piece_file_name(s, rank, ranks));
+            if own.is_file() {
+                std::fs::remove_file(&own)
+                    .with_context(|| format!("cannot remove {}", own.display()))?;
+            }
+        }
+        if !root {
+            return Ok(None);
+        }
+        log = Some(RunLog::append(&dir.join("log.txt"))?);
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(dir.join("series.csv"))
+            .and_then(|f| f.set_len(p.series_len))
+            .context("cannot cut series.csv back to the checkpoint")?;
+        Ok(Some(SeriesCsv::append(&dir.join("series.csv"), &sim)?))
+    })();
+    // Every process has listed the later checkpoints before any is removed.
+    comm.barrier();
+    let series = agree(&comm, cut, "cut the run's files back to the checkpoint")?;
+    if root {
+        log_start(&sim, &comm, &dir, &format!("restart from step {step}"));
+        atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
+            .context("cannot write scene.ron")?;
+    }
+    let out = Outputs {
+        series,
+        pvd: (root && vtk(&sim))
+            .then(|| PvdSeries::with_entries(dir.join("fields.pvd"), p.pvd.clone())),
+        vtk: vtk(&sim),
+        count: p.snapshots as usize,
+        next_out: p.next_out,
+        next_ckpt: scene
+            .output
+            .checkpoint_every
+            .map(|c| next_multiple(ck0.time.t, c)),
+        last_ckpt: Some((step, ck0.file.clone())),
+        since_ckpt: Instant::now(),
+        dir,
+    };
+    let result = drive_split(sim, opts, &comm, out, wall0, false);
+    if let Err(e) = &result {
+        tracing::error!("{e:#}");
+    }
+    drop(log);
+    result
+}
+
+/// The run directory and step of the checkpoint `path` names, with every process's piece
+/// present and whole.
+fn resolve(path: &Path, ranks: usize) -> anyhow::Result<(PathBuf, u64)> {
+    let (dir, steps): (PathBuf, Vec<u64>) = if path.is_dir() {
+        let mut s: Vec<u64> = checkpoint::list(path)?
+            .into_iter()
+            .map(|(s, _)| s)
+            .collect();
+        s.reverse();
+        (path.to_path_buf(), s)
+    } else {
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let step = checkpoint::step_of(name).ok_or_else(|| {
+            anyhow::anyhow!(
+                "{}: not rank 0's checkpoint file (checkpoint_NNNNNN.bin) of a run",
+                path.display()
+            )
+        })?;
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+        (
+            dir.map_or(PathBuf::from("."), Path::to_path_buf),
+            vec![step],
+        )
+    };
+    for &step in &steps {
+        let whole = (0..ranks).all(|r| {
+            Checkpoint::load(&dir.join(checkpoint::piece_file_name(step, r, ranks))).is_ok()
+        });
+        if whole {
+            return Ok((dir, step));
+        }
+    }
+    anyhow::bail!(
+        "{} holds no checkpoint written by {ranks} processes with every piece whole \
+         (checkpoint_NNNNNN.bin and checkpoint_NNNNNN.rankRof{ranks}.bin); a split run restarts \
+         on as many processes as wrote it",
+        path.display()
+    )
+}
+
+/// `r` on every process if it is `Ok` on every process; otherwise this process's error, or on
+/// the processes where it went well an error naming what another could not do.
+fn agree<T>(comm: &Comm, r: anyhow::Result<T>, what: &str) -> anyhow::Result<T> {
+    let failed = comm.max_one(f64::from(u8::from(r.is_err())));
+    match r {
+        Err(e) => Err(e),
+        Ok(_) if failed > 0.0 => anyhow::bail!("another process could not {what}"),
+        Ok(v) => Ok(v),
+    }
+}
+
+/// Whether `sim`'s snapshots hold field files.
+fn vtk(sim: &Simulation) -> bool {
+    sim.scene().output.formats.contains(&OutputFormat::Vtk) && !sim.scene().output.fields.is_empty()
+}
+
+/// The log's first line of a split run (rank 0).
+fn log_start(sim: &Simulation, comm: &Comm, dir: &Path, what: &str) {
+    let grid = sim.grid().whole();
+    tracing::info!(
+        "tumble {} {what} of scene `{}` on {} processes: 3D grid {}x{}x{} (h = {}) in slabs of {} \
+         to {} z-planes, end time {}, {} threads each, output in {}",
+        env!("CARGO_PKG_VERSION"),
+        sim.scene().name,
+        comm.size(),
+        grid.n[0],
+        grid.n[1],
+        grid.n[2],
+        grid.h,
+        grid.n[2] / comm.size(),
+        grid.n[2].div_ceil(comm.size()),
+        sim.scene().numerics.end_time,
+        rayon::current_num_threads(),
+        dir.display()
+    );
+}
+
+impl Outputs {
+    fn snapshot(&mut self, sim: &Simulation) -> anyhow::Result<()> {
+        if self.vtk {
+            let index = crate::io::snapshots::write_pieces(&self.dir, self.count, sim)?;
+            if let Some(p) = self.pvd.as_mut() {
+                p.push(sim.time(), &index)
+                    .context("cannot write fields.pvd")?;
+            }
+            self.count += 1;
+        }
+        Ok(())
+    }
+
+    /// Every process writes its piece of a checkpoint (rank 0's with the run's progress), then
+    /// each removes its pieces of the checkpoints beyond `output.checkpoints_kept`.
+    fn checkpoint(&mut self, sim: &mut Simulation, comm: &Comm) -> anyhow::Result<()> {
+        let series_len = match self.series.as_mut() {
+            Some(s) => {
+                s.flush()?;
+                let path = self.dir.join("series.csv");
+                let f = std::fs::File::open(&path)
+                    .with_context(|| format!("cannot open {}", path.display()))?;
+                f.sync_all()
+                    .with_context(|| format!("cannot sync {}", path.display()))?;
+                f.metadata()?.len()
+            }
+            None => 0,
+        };
+        let progress = RunProgress {
+            next_out: self.next_out,
+            snapshots: self.count as u64,
+            pvd: self
+                .pvd
+                .as_ref()
+                .map(|p| p.entries().to_vec())
+                .unwrap_or_default(),
+            series_len,
+            bodies_len: None,
+            contacts_len: None,
+        };
+        let (rank, ranks, step) = (comm.rank(), comm.size(), sim.steps());
+        let path = self
+            .dir
+            .join(checkpoint::piece_file_name(step, rank, ranks));
+        let saved = checkpoint::save(&path, sim, &progress)
+            .with_context(|| format!("cannot write {}", path.display()));
+        agree(comm, saved, "write its piece of the checkpoint")?;
+        // Every piece is whole: the checkpoint is complete. The old ones, as every process
+        // sees them before any is removed.
+        let kept = sim.scene().output.checkpoints_kept.max(1);
+        let all = checkpoint::list(&self.dir)?;
+        let old: Vec<u64> = all
+            .iter()
+            .take(all.len().saturating_sub(kept))
+            .map(|(s, _)| *s)
+            .collect();
+        comm.barrier();
+        for s in old {
+            let own = self.dir.join(checkpoint::piece_file_name(s, rank, ranks));
+            std::fs::remove_file(&own)
+                .with_context(|| format!("cannot remove the old checkpoint {}", own.display()))?;
+        }
+        if comm.is_root() {
+            tracing::info!(
+                "checkpoint at step {step}, t = {}: {} and {} more pieces",
+                sim.time(),
+                path.display(),
+                ranks - 1
+            );
+        }
+        self.last_ckpt = Some((step, self.dir.join(checkpoint::file_name(step))));
+        self.since_ckpt = Instant::now();
+        Ok(())
+    }
+}
+
 fn drive_split(
     mut sim: Simulation,
     opts: &RunOptions,
     comm: &Comm,
-    dir: PathBuf,
+    mut out: Outputs,
     wall0: Instant,
+    first: bool,
 ) -> anyhow::Result<RunSummary> {
     let root = comm.is_root();
     let steps0 = sim.steps();
-    let mut series = if root {
-        Some(SeriesCsv::create(&dir.join("series.csv"), &sim)?)
-    } else {
-        None
-    };
-    let vtk = sim.scene().output.formats.contains(&OutputFormat::Vtk)
-        && !sim.scene().output.fields.is_empty();
-    let mut pvd = (root && vtk).then(|| PvdSeries::new(dir.join("fields.pvd")));
-    let mut count = 0usize;
-    let mut snapshot = |sim: &Simulation, pvd: &mut Option<PvdSeries>| -> anyhow::Result<()> {
-        if vtk {
-            let index = crate::io::snapshots::write_pieces(&dir, count, sim)?;
-            if let Some(p) = pvd.as_mut() {
-                p.push(sim.time(), &index)
-                    .context("cannot write fields.pvd")?;
-            }
-            count += 1;
+    if first {
+        out.snapshot(&sim)?;
+        if let Some(s) = out.series.as_mut() {
+            s.row(&sim)?;
         }
-        Ok(())
-    };
-    snapshot(&sim, &mut pvd)?;
-    if let Some(s) = series.as_mut() {
-        s.row(&sim)?;
     }
     let end = sim.scene().numerics.end_time;
     let every = sim.scene().output.every;
+    let ckpt_every = sim.scene().output.checkpoint_every;
+    let wall = sim.scene().output.checkpoint_wall.filter(|&w| w > 0.0);
     let lands_on_outputs = sim.scene().numerics.dt.lands_on_outputs();
-    let mut next_out = every.map(|e| e.min(end));
     let mut stop_at = None;
     let mut progress = Progress::new(&sim, opts.quiet || !root, wall0);
     let mut totals: Vec<(&'static str, f64)> = Vec::new();
     let result = (|| -> anyhow::Result<()> {
         while sim.time() < end * (1.0 - 1e-12) {
-            let stop = match next_out {
+            let stop = match out.next_out {
                 Some(o) if lands_on_outputs => o.min(end),
                 _ => end,
             };
@@ -160,8 +394,16 @@ fn drive_split(
                 stop_at = Some(stop);
             }
             // Every process sees the same global quantities, so a blow-up stops them all.
-            sim.step()?;
-            if let Some(s) = series.as_mut() {
+            if let Err(e) = sim.step() {
+                return Err(match &out.last_ckpt {
+                    Some((s, p)) => anyhow::anyhow!(
+                        "{e:#}; the last good checkpoint is {} (step {s})",
+                        p.display()
+                    ),
+                    None => e,
+                });
+            }
+            if let Some(s) = out.series.as_mut() {
                 s.row(&sim)?;
             }
             add_timings(&mut totals, &sim.timings().last);
@@ -171,31 +413,59 @@ fn drive_split(
             let t = sim.time();
             let slack = LAND_TOLERANCE * sim.sample().dt;
             let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
-            if due(next_out) || t >= end * (1.0 - 1e-12) {
-                snapshot(&sim, &mut pvd)?;
+            if due(out.next_out) || t >= end * (1.0 - 1e-12) {
+                out.snapshot(&sim)?;
                 if let Some(e) = every {
-                    while let Some(o) = next_out.filter(|&o| due(Some(o)) && o + e > o) {
-                        next_out = Some(o + e);
+                    while let Some(o) = out.next_out.filter(|&o| due(Some(o)) && o + e > o) {
+                        out.next_out = Some(o + e);
                     }
                 }
             }
-            let stop = checkpoint::interrupt_requested() && t < end * (1.0 - 1e-12);
-            if comm.max_one(f64::from(u8::from(stop))) > 0.0 {
-                anyhow::bail!(
-                    "interrupted at step {} (t = {t}); a run on several processes writes no \
-                     checkpoint yet",
-                    sim.steps()
-                );
+            // Rank 0's clock decides a wall-clock checkpoint; anyone's Ctrl-C stops them all.
+            let wall_due =
+                root && wall.is_some_and(|w| out.since_ckpt.elapsed().as_secs_f64() >= w);
+            let interrupted = checkpoint::interrupt_requested() && t < end * (1.0 - 1e-12);
+            let mut flags = [
+                f64::from(u8::from(wall_due)),
+                f64::from(u8::from(interrupted)),
+            ];
+            comm.max(&mut flags);
+            let sim_due = out.next_ckpt.is_some_and(|c| t >= c * (1.0 - 1e-12));
+            let stop = flags[1] > 0.0;
+            if flags[0] > 0.0 || sim_due || stop {
+                out.checkpoint(&mut sim, comm)?;
             }
+            if (sim_due || stop)
+                && let Some(e) = ckpt_every
+            {
+                out.next_ckpt = Some(next_multiple(t, e));
+            }
+            if stop {
+                return Err(checkpoint::Interrupted {
+                    step: sim.steps(),
+                    t,
+                    checkpoint: out.dir.join(checkpoint::file_name(sim.steps())),
+                }
+                .into());
+            }
+        }
+        // A final checkpoint when they are periodic or the run wrote or started from one.
+        if (ckpt_every.is_some() || out.last_ckpt.is_some())
+            && out
+                .last_ckpt
+                .as_ref()
+                .is_none_or(|(s, _)| *s != sim.steps())
+        {
+            out.checkpoint(&mut sim, comm)?;
         }
         Ok(())
     })();
     progress.bar.finish_and_clear();
-    if let Some(s) = series.as_mut() {
+    if let Some(s) = out.series.as_mut() {
         s.flush()?;
     }
     let summary = RunSummary {
-        dir: dir.clone(),
+        dir: out.dir.clone(),
         steps: sim.steps(),
         steps_run: sim.steps() - steps0,
         last: sim.sample(),
@@ -205,11 +475,11 @@ fn drive_split(
     if root {
         crate::io::runlog::timings_table(&summary.system_seconds, summary.steps_run, summary.wall);
         super::write_timings(
-            &dir.join("timings.csv"),
+            &out.dir.join("timings.csv"),
             &summary.system_seconds,
             summary.steps_run,
         )?;
-        plot(&dir, opts.quiet);
+        plot(&out.dir, opts.quiet);
     }
     result?;
     Ok(summary)

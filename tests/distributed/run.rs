@@ -177,3 +177,106 @@ fn compare(whole: &vti::VtiData, pieces: &Arrays) -> Result<(), String> {
     }
     Ok(())
 }
+
+/// A Taylor-Green vortex at 48³ with a checkpoint every 0.5 (20 steps) to t = 3.
+const LONG_SCENE: &str = r#"Scene(
+    name: "tg-long",
+    domain: (extent: [6.283185307179586, 6.283185307179586, 6.283185307179586], cells: [48, 48, 48]),
+    fluid: (viscosity: 0.000625),
+    numerics: (dt: Adaptive(c: 0.5, dt_max: 0.025), end_time: 3.0),
+    initial: [TaylorGreen3d(amplitude: 1.0, wavenumber: 1.0)],
+    output: (every: 1.0, checkpoint_every: 0.5),
+)"#;
+
+/// The processes whose parent is `pid` (from /proc).
+fn children(pid: u32) -> Vec<u32> {
+    let Ok(dir) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    dir.filter_map(|e| {
+        let e = e.ok()?;
+        let child: u32 = e.file_name().to_str()?.parse().ok()?;
+        let stat = std::fs::read_to_string(e.path().join("stat")).ok()?;
+        // pid (comm) state ppid ...: the fields after the last ')'.
+        let ppid: u32 = stat
+            .rsplit(')')
+            .next()?
+            .split_whitespace()
+            .nth(1)?
+            .parse()
+            .ok()?;
+        (ppid == pid).then_some(child)
+    })
+    .collect()
+}
+
+/// SIGKILL of one of two processes after the run's second checkpoint, then `--restart` of the
+/// run directory on two processes: `series.csv`, the last snapshot's pieces and the last
+/// checkpoint's pieces are those of an uninterrupted two-process run, byte for byte.
+pub fn killed_and_restarted_is_bit_identical() -> Result<(), String> {
+    let tumble = env!("CARGO_BIN_EXE_tumble");
+    let dir = std::env::temp_dir().join(format!("tumble-mpi-kill-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    std::fs::write(dir.join("tg.ron"), LONG_SCENE).map_err(|e| e.to_string())?;
+    let start = |out: &str| {
+        let mut c = mpirun(2);
+        c.arg(tumble)
+            .args(["run", "--quiet", "--out", out, "tg.ron"])
+            .current_dir(&dir)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null());
+        c
+    };
+    let st = start("full").status().map_err(|e| e.to_string())?;
+    if !st.success() {
+        return Err(format!("the uninterrupted run failed ({st})"));
+    }
+    let mut job = start("killed").spawn().map_err(|e| e.to_string())?;
+    let piece = dir.join("killed/checkpoint_000040.rank1of2.bin");
+    let t0 = std::time::Instant::now();
+    while !piece.is_file() {
+        if t0.elapsed().as_secs() > 120 || job.try_wait().map_err(|e| e.to_string())?.is_some() {
+            let _ = job.kill();
+            return Err("the run ended or stalled before its second checkpoint".into());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let ranks = children(job.id());
+    let victim = *ranks.last().ok_or("mpirun started no process to kill")?;
+    // SAFETY: kill has no memory preconditions; the pid is a child of our mpirun.
+    unsafe { libc::kill(victim as i32, libc::SIGKILL) };
+    let st = job.wait().map_err(|e| e.to_string())?;
+    if st.success() {
+        return Err("the run ended before one of its processes was killed".into());
+    }
+    let mut restart = mpirun(2);
+    let st = restart
+        .arg(tumble)
+        .args(["run", "--quiet", "--restart", "killed"])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .map_err(|e| e.to_string())?;
+    if !st.success() {
+        return Err(format!("the restart failed ({st})"));
+    }
+    for file in [
+        "series.csv",
+        "fields_000003.pvti",
+        "fields_000003_0.vti",
+        "fields_000003_1.vti",
+        "checkpoint_000120.bin",
+        "checkpoint_000120.rank1of2.bin",
+    ] {
+        let a =
+            std::fs::read(dir.join("full").join(file)).map_err(|e| format!("full/{file}: {e}"))?;
+        let b = std::fs::read(dir.join("killed").join(file))
+            .map_err(|e| format!("killed/{file}: {e}"))?;
+        if a != b {
+            return Err(format!("{file} differs from the uninterrupted run's"));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
