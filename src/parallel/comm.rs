@@ -186,35 +186,32 @@ impl Comm {
 
     /// All-to-all with counts: rank `r`'s block for rank `s` is `send[sdispl[s]..][..scount[s]]`
     /// and lands on `s` at `recv[rdispl[r]..][..rcount[r]]`. Counts and displacements are in
-    /// values. One process copies its one block.
+    /// values, MPI's 32-bit integers ([`count`] makes them). One process copies its one block.
     pub fn all_to_all<T: Plain>(
         &self,
         send: &[T],
-        scount: &[usize],
-        sdispl: &[usize],
+        scount: &[i32],
+        sdispl: &[i32],
         recv: &mut [T],
-        rcount: &[usize],
-        rdispl: &[usize],
+        rcount: &[i32],
+        rdispl: &[i32],
     ) {
         match &self.inner {
             Inner::Solo => {
-                let n = scount[0];
+                let n = scount[0] as usize;
                 assert_eq!(
-                    n, rcount[0],
+                    scount[0], rcount[0],
                     "all_to_all: one process sends what it receives"
                 );
-                recv[rdispl[0]..rdispl[0] + n].copy_from_slice(&send[sdispl[0]..sdispl[0] + n]);
+                let (s, r) = (sdispl[0] as usize, rdispl[0] as usize);
+                recv[r..r + n].copy_from_slice(&send[s..s + n]);
             }
             #[cfg(feature = "mpi")]
             Inner::Mpi(c) => {
                 use mpi::collective::CommunicatorCollectives;
                 use mpi::datatype::{Partition, PartitionMut};
-                let i = |v: &[usize]| -> Vec<i32> { v.iter().map(|&x| count(x)).collect() };
-                // Four vectors of `size` entries per transpose, a few bytes per rank: far below
-                // the transpose's own cost, and MPI allocates as much inside.
-                let (sc, sd, rc, rd) = (i(scount), i(sdispl), i(rcount), i(rdispl));
-                let s = Partition::new(send, &sc[..], &sd[..]);
-                let mut r = PartitionMut::new(recv, &rc[..], &rd[..]);
+                let s = Partition::new(send, scount, sdispl);
+                let mut r = PartitionMut::new(recv, rcount, rdispl);
                 let t0 = std::time::Instant::now();
                 c.all_to_all_varcount_into(&s, &mut r);
                 self.count_time(t0);
@@ -262,9 +259,9 @@ impl Comm {
     }
 }
 
-/// An MPI count: the buffers of one rank stay below 2³¹ values of their type.
-#[cfg(feature = "mpi")]
-fn count(x: usize) -> i32 {
+/// An MPI count or displacement: the buffers of one process stay below 2³¹ values of their
+/// type (a clear panic past it, when the layout is made).
+pub fn count(x: usize) -> i32 {
     i32::try_from(x).unwrap_or_else(|_| {
         panic!("comm: a message of {x} values is past MPI's 32-bit counts; use more processes")
     })

@@ -15,7 +15,7 @@
 use rayon::prelude::*;
 
 use crate::base::grid::SyncPtr;
-use crate::parallel::comm::{Comm, Plain};
+use crate::parallel::comm::{Comm, Plain, count};
 use crate::parallel::slabs::Slabs;
 
 /// The geometry of one transpose (rows of `w` values): the copies and the all-to-all's counts.
@@ -25,11 +25,11 @@ pub struct Transpose {
     /// process and plane.
     moves: Vec<[usize; 3]>,
     /// Counts and displacements of the blocks in the send buffer (by destination process).
-    pcount: Vec<usize>,
-    pdispl: Vec<usize>,
+    pcount: Vec<i32>,
+    pdispl: Vec<i32>,
     /// Counts and displacements of the blocks in the row layout (by source process).
-    rcount: Vec<usize>,
-    rdispl: Vec<usize>,
+    rcount: Vec<i32>,
+    rdispl: Vec<i32>,
     /// Values of one field in the slab layout (and in the send buffer).
     slab_len: usize,
     /// Values of one field in the row layout.
@@ -47,8 +47,8 @@ impl Transpose {
         for s in 0..slabs.ranks {
             let rows = slabs.rows(s);
             let block = w * rows.len();
-            pdispl.push(w * nk * rows.start);
-            pcount.push(block * nk);
+            pdispl.push(count(w * nk * rows.start));
+            pcount.push(count(block * nk));
             for kl in 0..nk {
                 moves.push([
                     w * nk * rows.start + block * kl,
@@ -57,8 +57,8 @@ impl Transpose {
                 ]);
             }
             let planes = slabs.planes(s);
-            rdispl.push(w * nyl * planes.start);
-            rcount.push(w * nyl * planes.len());
+            rdispl.push(count(w * nyl * planes.start));
+            rcount.push(count(w * nyl * planes.len()));
         }
         Transpose {
             moves,
