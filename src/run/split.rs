@@ -164,6 +164,21 @@ pub fn restart_split(
                     .with_context(|| format!("cannot remove {}", own.display()))?;
             }
         }
+        // The snapshots written after the checkpoint are written again as the run gets there:
+        // each process removes its pieces of them, rank 0 their indexes.
+        for k in p.snapshots as usize.. {
+            let piece = dir.join(format!("fields_{k:06}_{rank}.vti"));
+            let index = dir.join(format!("fields_{k:06}.pvti"));
+            if !piece.is_file() && !index.is_file() {
+                break;
+            }
+            for f in [piece, index].iter().filter(|f| f.is_file()) {
+                if root || f.extension().is_some_and(|e| e == "vti") {
+                    std::fs::remove_file(f)
+                        .with_context(|| format!("cannot remove {}", f.display()))?;
+                }
+            }
+        }
         if !root {
             return Ok(None);
         }
