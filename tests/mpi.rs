@@ -176,6 +176,10 @@ fn main() {
             "a killed process, then --restart, is bit-identical",
             run::killed_and_restarted_is_bit_identical,
         ),
+        (
+            "a scene that cannot split is refused and writes nothing",
+            run::unsplittable_scene_is_refused_and_writes_nothing,
+        ),
     ] {
         match test() {
             Ok(()) => {

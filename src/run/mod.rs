@@ -81,7 +81,8 @@ impl std::fmt::Display for BadOutputDir {
 impl std::error::Error for BadOutputDir {}
 
 /// A run refused before it starts, with the numbers why (its outputs would not fit on the
-/// disk): `tumble run` exits with status 2.
+/// disk, or the scene cannot be split over the processes `mpirun` started): `tumble run` exits
+/// with status 2.
 #[derive(Debug)]
 pub struct RefusedRun(pub String);
 

@@ -66,8 +66,15 @@ pub fn run_split(
 ) -> anyhow::Result<RunSummary> {
     let wall0 = Instant::now();
     let scene = apply_overrides(scene, opts)?;
+    // A scene that cannot split is refused (exit status 2) before anything is written.
     if let Some(what) = unsupported(&scene) {
-        anyhow::bail!("{what} on several processes: not yet (run on one process)");
+        return Err(super::RefusedRun(format!(
+            "{what} on several processes: not yet (run on one process)"
+        ))
+        .into());
+    }
+    if let Err(e) = crate::sim::engine::split_scene(&scene, comm.clone()) {
+        return Err(super::RefusedRun(format!("{e:#}")).into());
     }
     // Rank 0 makes the directory; the others learn whether it could.
     let mut log = None;

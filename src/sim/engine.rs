@@ -67,11 +67,12 @@ impl SimulationBuilder {
 
 /// The decomposition of `scene`'s grid over the processes of `comm`, or why it cannot run
 /// split (so far: a 3D flow without bodies or free surface).
-fn split_scene(scene: &ValidScene, comm: Arc<Comm>) -> anyhow::Result<Decomposition> {
+pub fn split_scene(scene: &ValidScene, comm: Arc<Comm>) -> anyhow::Result<Decomposition> {
     let ranks = comm.size();
     if !scene.bodies.is_empty() || scene.free_surface.is_some() {
         anyhow::bail!(
-            "this scene has {}: on several processes tumble runs flows without bodies or free              surface so far (run it on one process, without mpirun, or with -np 1)",
+            "this scene has {}: on several processes tumble runs flows without bodies or free \
+             surface so far (run it on one process, without mpirun, or with -np 1)",
             if scene.bodies.is_empty() {
                 "a free surface"
             } else {

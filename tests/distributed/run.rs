@@ -280,3 +280,33 @@ pub fn killed_and_restarted_is_bit_identical() -> Result<(), String> {
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
 }
+
+/// A scene that cannot split (a body) under `mpirun -np 2`: exit status 2, no run directory.
+pub fn unsplittable_scene_is_refused_and_writes_nothing() -> Result<(), String> {
+    let tumble = env!("CARGO_BIN_EXE_tumble");
+    let dir = std::env::temp_dir().join(format!("tumble-mpi-refused-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let scene = r#"Scene(
+    domain: (extent: [1.0, 1.0, 1.0], cells: [16, 16, 16]),
+    fluid: (viscosity: 0.01),
+    numerics: (end_time: 0.01),
+    bodies: [(name: "ball", shape: Sphere(radius: 0.2), density: 2.0, position: [0.5, 0.5, 0.5])],
+)"#;
+    std::fs::write(dir.join("ball.ron"), scene).map_err(|e| e.to_string())?;
+    let st = mpirun(2)
+        .arg(tumble)
+        .args(["run", "--quiet", "--out", "out", "ball.ron"])
+        .current_dir(&dir)
+        .stderr(std::process::Stdio::null())
+        .status()
+        .map_err(|e| e.to_string())?;
+    let written = dir.join("out").exists();
+    let _ = std::fs::remove_dir_all(&dir);
+    match (st.code(), written) {
+        (Some(2), false) => Ok(()),
+        (code, written) => Err(format!(
+            "exit status {code:?} (2 expected), run directory written: {written}"
+        )),
+    }
+}
