@@ -338,6 +338,18 @@ fn check_fields(grid: &Grid, fields: &[VtkField]) -> io::Result<()> {
     Ok(())
 }
 
+/// The attributes naming a dataset's active arrays: its first scalar and its first vector.
+fn active_arrays(fields: &[VtkField]) -> String {
+    let mut a = String::new();
+    if let Some(f) = fields.iter().find(|f| f.components.len() == 1) {
+        let _ = write!(a, " Scalars=\"{}\"", xml_escape(f.name));
+    }
+    if let Some(f) = fields.iter().find(|f| f.components.len() > 1) {
+        let _ = write!(a, " Vectors=\"{}\"", xml_escape(f.name));
+    }
+    a
+}
+
 /// The whole grid's extent and `grid`'s (a slab's planes, [`Grid::slab`], are a piece of the
 /// whole), as VTK writes them: "i0 i1 j0 j1 k0 k1", inclusive node indices.
 pub fn extents(grid: &Grid) -> (String, String) {
@@ -392,14 +404,7 @@ fn vti_head(
     );
     head.push_str("    </FieldData>\n");
     let _ = writeln!(head, "    <Piece Extent=\"{extent}\">");
-    head.push_str("      <PointData");
-    if let Some(f) = fields.iter().find(|f| out_comps(f) == 1) {
-        let _ = write!(head, " Scalars=\"{}\"", xml_escape(f.name));
-    }
-    if let Some(f) = fields.iter().find(|f| out_comps(f) == 3) {
-        let _ = write!(head, " Vectors=\"{}\"", xml_escape(f.name));
-    }
-    head.push_str(">\n");
+    let _ = writeln!(head, "      <PointData{}>", active_arrays(fields));
     for (f, offset) in fields.iter().zip(offsets) {
         let nc = out_comps(f);
         let _ = writeln!(
@@ -448,14 +453,7 @@ pub fn write_pvti(
         fmt_f64(whole.origin[1]),
         fmt_f64(if whole.dim == 3 { whole.origin[2] } else { 0.0 })
     );
-    x.push_str("    <PPointData");
-    if let Some(f) = fields.iter().find(|f| out_comps(f) == 1) {
-        let _ = write!(x, " Scalars=\"{}\"", xml_escape(f.name));
-    }
-    if let Some(f) = fields.iter().find(|f| out_comps(f) == 3) {
-        let _ = write!(x, " Vectors=\"{}\"", xml_escape(f.name));
-    }
-    x.push_str(">\n");
+    let _ = writeln!(x, "    <PPointData{}>", active_arrays(fields));
     for f in fields {
         let _ = writeln!(
             x,

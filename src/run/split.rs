@@ -117,12 +117,7 @@ pub fn run_split(
         since_ckpt: wall0,
         dir,
     };
-    let result = drive_split(sim, opts, &comm, out, wall0, true);
-    if let Err(e) = &result {
-        tracing::error!("{e:#}");
-    }
-    drop(log);
-    result
+    logged(drive_split(sim, opts, &comm, out, wall0, true), log)
 }
 
 /// Continue a split run from its checkpoint `path` (rank 0's file, or the run directory: then
@@ -220,7 +215,11 @@ pub fn restart_split(
         since_ckpt: Instant::now(),
         dir,
     };
-    let result = drive_split(sim, opts, &comm, out, wall0, false);
+    logged(drive_split(sim, opts, &comm, out, wall0, false), log)
+}
+
+/// `result`, its error logged (rank 0's log, while it is open).
+fn logged(result: anyhow::Result<RunSummary>, log: Option<RunLog>) -> anyhow::Result<RunSummary> {
     if let Err(e) = &result {
         tracing::error!("{e:#}");
     }
