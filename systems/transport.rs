@@ -27,6 +27,12 @@
 //! particle touches 4 nodes per sweep instead of 4³: this is what makes a 128³ step cheap.
 //! Every line of nodes is handled by one task, so results do not depend on the thread count.
 //!
+//! On several processes (a slab of z-planes each, [`crate::parallel`]) the x and y sweeps are
+//! local; the z sweep runs on whole z-lines in the row layout, reached by the transposes the
+//! FFTs use, so each line's particles move and remesh exactly as on one process; the
+//! stretching reads [`R`] ghost planes of the velocity from each neighbour. The results are the
+//! one-process results to round-off in the reductions (the cutoff's max|ω| is exact).
+//!
 //! Nodes whose vorticity is at or below the cutoff create no particle: their vorticity stays
 //! where it is (circulation is kept; the error is of the size of the cutoff).
 //!
