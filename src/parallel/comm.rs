@@ -40,7 +40,7 @@ enum Inner {
 }
 
 // SAFETY: an MPI communicator is a handle that MPI lets any thread use when the library was
-// initialized with MPI_THREAD_SERIALIZED or above ([`Comm::world`] checks it) and the calls are
+// initialized with MPI_THREAD_SERIALIZED or above ([`Mpi::init`] checks it) and the calls are
 // not concurrent: every method takes `&self` but is only called from the schedule's systems and
 // the driver, which run one at a time, never from parallel loops (the module docs).
 #[cfg(feature = "mpi")]
@@ -71,7 +71,8 @@ impl Comm {
     }
 
     /// The processes of an MPI communicator (a duplicate of `comm`, so tumble's messages never
-    /// meet the caller's).
+    /// meet the caller's; it is freed when the `Comm` is dropped, which must be before MPI is
+    /// finalized).
     #[cfg(feature = "mpi")]
     pub fn from_mpi(comm: &impl mpi::topology::Communicator) -> Self {
         Comm {
