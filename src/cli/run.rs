@@ -20,9 +20,12 @@ pub fn run(scene: Option<&Path>, restart: Option<&Path>, opts: &RunOptions) -> u
     }
     let split = opts.comm.as_ref().filter(|c| c.size() > 1);
     let result = match (restart, loaded) {
-        (Some(ck), _) if split.is_some() => {
-            crate::run::split::restart_split(ck, opts, split.expect("checked").clone())
-        }
+        (Some(ck), loaded) if split.is_some() => crate::run::split::restart_split(
+            ck,
+            scene.zip(loaded),
+            opts,
+            split.expect("checked").clone(),
+        ),
         (Some(ck), loaded) => restart_run(ck, scene.zip(loaded), opts),
         (None, Some(scene)) => run_scene(scene, opts),
         (None, None) => unreachable!("clap requires a scene without --restart"),

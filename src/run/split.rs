@@ -122,9 +122,11 @@ pub fn run_split(
 
 /// Continue a split run from its checkpoint `path` (rank 0's file, or the run directory: then
 /// the latest checkpoint of which every process's piece reads back) on the processes of `comm`,
-/// as many as wrote it.
+/// as many as wrote it. `scene`, if given (with its file for messages), must be the
+/// checkpoint's, as on one process.
 pub fn restart_split(
     path: &Path,
+    scene: Option<(&Path, ValidScene)>,
     opts: &RunOptions,
     comm: Arc<Comm>,
 ) -> anyhow::Result<RunSummary> {
@@ -141,7 +143,19 @@ pub fn restart_split(
         })
         .map_err(anyhow::Error::from);
     let (mine, ck0) = agree(&comm, loaded, "read the checkpoint")?;
-    let scene = apply_overrides(ck0.scene()?, opts)?;
+    let run_scene = ck0.scene()?;
+    if let Some((file, given)) = &scene
+        && !checkpoint::same_run(given, &run_scene)
+    {
+        return Err(ck0
+            .error(format!(
+                "the scene {} is not the one the checkpoint was written with (only the end \
+                 time and the checkpoint interval may change on a restart)",
+                file.display()
+            ))
+            .into());
+    }
+    let scene = apply_overrides(run_scene, opts)?;
     let built = Simulation::builder(scene.clone())
         .add_plugins(&opts.plugins)
         .on_processes(comm.clone())
