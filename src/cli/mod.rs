@@ -146,6 +146,17 @@ pub fn status(
     if let Some(code) = set_threads(cli.threads) {
         return code;
     }
+    // Under mpirun only `run` and `bench` split their work; every other command would run
+    // once per process, writing the same files.
+    if !matches!(cli.command, Command::Run { .. } | Command::Bench { .. })
+        && let Some(n) = crate::parallel::comm::launcher_size().filter(|&n| n > 1)
+    {
+        eprintln!(
+            "error: started by mpirun on {n} processes: only `tumble run` and `tumble bench` run \
+             on several processes (run this command without mpirun)"
+        );
+        return 2;
+    }
     match cli.command {
         Command::Run {
             scene,

@@ -315,7 +315,7 @@ pub struct Processes {
 
 /// The number of processes the launcher says this one is among (Open MPI's or a PMI
 /// launcher's variables), if any.
-fn launcher_size() -> Option<usize> {
+pub fn launcher_size() -> Option<usize> {
     ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"]
         .iter()
         .find_map(|v| std::env::var(v).ok()?.parse().ok())
