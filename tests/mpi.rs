@@ -180,6 +180,10 @@ fn main() {
             "a scene that cannot split is refused and writes nothing",
             run::unsplittable_scene_is_refused_and_writes_nothing,
         ),
+        (
+            "other commands refuse several processes",
+            run::other_commands_refuse_several_processes,
+        ),
     ] {
         match test() {
             Ok(()) => {

@@ -310,3 +310,26 @@ pub fn unsplittable_scene_is_refused_and_writes_nothing() -> Result<(), String> 
         )),
     }
 }
+
+/// Under `mpirun -np 2`, `tumble check` (a command that does not split its work) refuses with
+/// exit status 2 instead of running once per process.
+pub fn other_commands_refuse_several_processes() -> Result<(), String> {
+    let tumble = env!("CARGO_BIN_EXE_tumble");
+    let dir = std::env::temp_dir().join(format!("tumble-mpi-check-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    std::fs::write(dir.join("tg.ron"), SCENE).map_err(|e| e.to_string())?;
+    let st = mpirun(2)
+        .arg(tumble)
+        .args(["check", "tg.ron"])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .map_err(|e| e.to_string())?;
+    let _ = std::fs::remove_dir_all(&dir);
+    match st.code() {
+        Some(2) => Ok(()),
+        code => Err(format!("exit status {code:?}, 2 expected")),
+    }
+}
