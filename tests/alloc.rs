@@ -61,9 +61,13 @@ fn no_allocation_after_new() {
         // One worker thread: the work is the same as with more (fixed chunks), while rayon's own
         // work-stealing bookkeeping (which may allocate the first time a thread steals) stays
         // out of the count.
+        // A worker stops counting before it exits: the pool of the previous grid is dropped
+        // without waiting for its thread, whose thread-local destructors (crossbeam's epoch
+        // handle pushes a bag) then allocate, under load during this grid's count.
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .start_handler(|_| MARK.with(|m| m.set(true)))
+            .exit_handler(|_| MARK.with(|m| m.set(false)))
             .build()
             .unwrap();
         let ncomp = grid.omega_components();
