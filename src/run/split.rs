@@ -301,8 +301,8 @@ fn vtk(sim: &Simulation) -> bool {
 fn log_start(sim: &Simulation, comm: &Comm, dir: &Path, what: &str) {
     let grid = sim.grid().whole();
     tracing::info!(
-        "tumble {} {what} of scene `{}` on {} processes: 3D grid {}x{}x{} (h = {}) in slabs of {} \
-         to {} z-planes, end time {}, {} threads each, output in {}",
+        "tumble {} {what} of scene `{}` on {} processes: 3D grid {}x{}x{} (h = {}), end time {}, \
+         {} threads each, output in {}",
         env!("CARGO_PKG_VERSION"),
         sim.scene().name,
         comm.size(),
@@ -310,12 +310,12 @@ fn log_start(sim: &Simulation, comm: &Comm, dir: &Path, what: &str) {
         grid.n[1],
         grid.n[2],
         grid.h,
-        grid.n[2] / comm.size(),
-        grid.n[2].div_ceil(comm.size()),
         sim.scene().numerics.end_time,
         rayon::current_num_threads(),
         dir.display()
     );
+    let e = crate::io::estimate::split_estimate(sim.scene(), comm.size());
+    tracing::info!("{}", crate::io::estimate::split_words(&e));
 }
 
 impl Outputs {
