@@ -109,13 +109,14 @@ pub struct TransportScratch {
     split: Option<SplitScratch>,
 }
 
-/// The transport of a slab ([`Grid::slab`]): the velocity with [`R`] ghost planes on each side
+/// The transport of a slab ([`Grid::slab`]): [`R`] ghost planes of the velocity on each side
 /// for the stretching's differences along z, and the z sweep run on whole lines along z, in the
 /// row layout ([`Transpose`]), where each line is one process's and the sweep is the one-process
 /// code unchanged: the particles of a line then move and remesh exactly as on one process.
 struct SplitScratch {
     d: Decomposition,
-    /// The velocity's components on the slab's planes and R ghost planes each side.
+    /// Per velocity component, the R planes below the slab then the R planes above it (the
+    /// neighbours').
     u_ghost: Vec<Vec<f64>>,
     transpose: Transpose,
     /// The vorticity's components and the velocity's z component in the row layout.
@@ -135,7 +136,7 @@ impl SplitScratch {
         origin[1] += rows.start as f64 * grid.h;
         SplitScratch {
             d: d.clone(),
-            u_ghost: vec![vec![0.0; grid.plane() * (grid.n[2] + 2 * R)]; 3],
+            u_ghost: vec![vec![0.0; grid.plane() * 2 * R]; 3],
             rows: vec![vec![0.0; transpose.rows_len()]; 4],
             packed: vec![0.0; transpose.slab_len()],
             transpose,
@@ -143,13 +144,11 @@ impl SplitScratch {
         }
     }
 
-    /// Fills `u_ghost` from the slab's velocity and its neighbours' planes.
+    /// Fills `u_ghost` with the neighbours' planes of the velocity.
     fn fill_ghosts(&mut self, u: &[Vec<f64>]) {
         for (g, c) in self.u_ghost.iter_mut().zip(u) {
-            let plane = (g.len() - c.len()) / (2 * R);
-            let (below, rest) = g.split_at_mut(R * plane);
-            let (mid, above) = rest.split_at_mut(c.len());
-            mid.copy_from_slice(c);
+            let plane = g.len() / (2 * R);
+            let (below, above) = g.split_at_mut(R * plane);
             let (first, last) = (&c[..R * plane], &c[c.len() - R * plane..]);
             self.d
                 .comm
@@ -254,7 +253,7 @@ pub fn transport(
         sp.fill_ghosts(u);
     }
     let stretch_now = |omega: &mut [Vec<f64>], split: &Option<SplitScratch>| match split {
-        Some(sp) => stretch_ghosted(&grid, dt, omega, &sp.u_ghost, R),
+        Some(sp) => stretch_ghosted(&grid, dt, omega, u, Some(&sp.u_ghost)),
         None => stretch(&grid, dt, omega, u),
     };
     if grid.dim == 3 && !*reverse {
@@ -487,23 +486,26 @@ const STRETCH_COEFFS: [f64; 4] = [4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280
 /// centred differences. Works row by row: the neighbour rows (±1..±R in y and z) are plain
 /// slices, so the inner loop over x is simple indexing.
 pub fn stretch(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>]) {
-    stretch_ghosted(grid, dt, omega, u, 0);
+    stretch_ghosted(grid, dt, omega, u, None);
 }
 
-/// [`stretch`] with the velocity given on the grid's planes and `ghost` more on each side (the
-/// neighbouring processes' planes of a slab): its differences along z read them instead of
-/// wrapping round the grid. With `ghost = 0` the grid is periodic in z.
-pub fn stretch_ghosted(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f64>], ghost: usize) {
+/// [`stretch`] on a slab: with `ghosts`, per velocity component the [`R`] planes below the
+/// grid's and the R above it (the neighbouring processes' planes), which its differences along z
+/// read instead of wrapping round the grid; without, the grid is periodic in z.
+pub fn stretch_ghosted(
+    grid: &Grid,
+    dt: f64,
+    omega: &mut [Vec<f64>],
+    u: &[Vec<f64>],
+    ghosts: Option<&[Vec<f64>]>,
+) {
     let [nx, ny, nz] = grid.n;
-    assert!(
-        ghost == 0 || ghost >= R,
-        "stretch: {ghost} ghost planes for a reach of {R}"
-    );
-    assert_eq!(
-        u[0].len(),
-        nx * ny * (nz + 2 * ghost),
-        "stretch: velocity length"
-    );
+    if let Some(g) = ghosts {
+        assert!(
+            nz >= R && g.iter().all(|c| c.len() == 2 * R * nx * ny),
+            "stretch: {R} ghost planes a side of a slab of {nz}"
+        );
+    }
     let plane = nx * ny;
     let c = STRETCH_COEFFS.map(|c| c / grid.h);
     let (o0, rest) = omega.split_at_mut(1);
@@ -518,20 +520,27 @@ pub fn stretch_ghosted(grid: &Grid, dt: f64, omega: &mut [Vec<f64>], u: &[Vec<f6
         .for_each(|(k, ((w0, w1), w2))| {
             for j in 0..ny {
                 let row = |jj: usize, kk: usize| nx * (jj + ny * kk);
-                // The velocity's plane of node plane k.
-                let ku = k + ghost;
-                let r = row(j, ku);
-                // Rows at y-m and y+m, z-m and z+m (m = 1..=R).
-                let ry = offsets().map(|d| row(wrap(j, d, ny), ku));
-                let rz = offsets().map(|d| {
-                    let kk = if ghost == 0 {
-                        wrap(k, d, nz)
-                    } else {
-                        (ku as isize + d) as usize
-                    };
-                    row(j, kk)
+                let r = row(j, k);
+                // Rows at y-m and y+m, z-m and z+m (m = 1..=R); on a slab, the rows beyond it
+                // are the ghost planes' (below: planes 0..R, above: R..2R).
+                let ry = offsets().map(|d| row(wrap(j, d, ny), k));
+                let gu = [0, 1, 2].map(|a| {
+                    let f = &u[a];
+                    let rz = offsets().map(|d| match ghosts {
+                        None => &f[row(j, wrap(k, d, nz))..][..nx],
+                        Some(g) => {
+                            let kk = k as isize + d;
+                            if kk < 0 {
+                                &g[a][row(j, (R as isize + kk) as usize)..][..nx]
+                            } else if kk as usize >= nz {
+                                &g[a][row(j, R + kk as usize - nz)..][..nx]
+                            } else {
+                                &f[row(j, kk as usize)..][..nx]
+                            }
+                        }
+                    });
+                    (&f[r..r + nx], ry.map(|o| &f[o..o + nx]), rz)
                 });
-                let gu = [0, 1, 2].map(|a| rows(&u[a], r, ry, rz, nx));
                 let w = [
                     &mut w0[nx * j..nx * (j + 1)],
                     &mut w1[nx * j..nx * (j + 1)],
@@ -660,16 +669,9 @@ fn stretch_row(gu: &[Rows; 3], w: [&mut [f64]; 3], c: [f64; R], dt: f64) {
     }
 }
 
-/// The row at offset `r` and its y and z neighbour rows (in the order of [`offsets`]), as
+/// A row of a velocity component and its y and z neighbour rows (in the order of [`offsets`]), as
 /// slices of length `nx`.
 type Rows<'a> = (&'a [f64], [&'a [f64]; 2 * R], [&'a [f64]; 2 * R]);
-fn rows(f: &[f64], r: usize, ry: [usize; 2 * R], rz: [usize; 2 * R], nx: usize) -> Rows<'_> {
-    (
-        &f[r..r + nx],
-        ry.map(|o| &f[o..o + nx]),
-        rz.map(|o| &f[o..o + nx]),
-    )
-}
 
 /// Particle transport (a fluid run); its scratch, which holds the split order a
 /// checkpoint keeps, is there in every run.
