@@ -293,10 +293,7 @@ pub fn write_vti_compressed(
         .iter()
         .map(|f| zlib_array(&field_bytes(f, npts, precision)))
         .collect::<io::Result<_>>()?;
-    let ty = match precision {
-        Precision::Single => "Float32",
-        Precision::Double => "Float64",
-    };
+    let ty = vtk_type(precision);
     let mut offsets = Vec::with_capacity(arrays.len());
     let mut offset = 0u64;
     for a in &arrays {
@@ -336,6 +333,14 @@ fn check_fields(grid: &Grid, fields: &[VtkField]) -> io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// VTK's name of the arrays' type in `precision`.
+fn vtk_type(precision: Precision) -> &'static str {
+    match precision {
+        Precision::Single => "Float32",
+        Precision::Double => "Float64",
+    }
 }
 
 /// The attributes naming a dataset's active arrays: its first scalar and its first vector.
@@ -432,10 +437,7 @@ pub fn write_pvti(
     precision: Precision,
     pieces: &[(String, String)],
 ) -> io::Result<()> {
-    let ty = match precision {
-        Precision::Single => "Float32",
-        Precision::Double => "Float64",
-    };
+    let ty = vtk_type(precision);
     let out_comps = |f: &VtkField| if f.components.len() == 1 { 1 } else { 3 };
     let (whole_extent, _) = extents(whole);
     let h = fmt_f64(whole.h);

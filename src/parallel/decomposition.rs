@@ -31,24 +31,14 @@ impl Decomposition {
     pub fn local_grid(&self, whole: &Grid) -> Grid {
         whole.slab(self.slabs.my_planes())
     }
-
-    /// The sum over the processes of one value (the same bits on each).
-    pub fn sum(&self, x: f64) -> f64 {
-        self.comm.sum_one(x)
-    }
-
-    /// The maximum over the processes of one value.
-    pub fn max(&self, x: f64) -> f64 {
-        self.comm.max_one(x)
-    }
 }
 
 /// The sum over the processes of `x` when split (`x` itself on one).
 pub fn global_sum(d: Option<&Decomposition>, x: f64) -> f64 {
-    d.map_or(x, |d| d.sum(x))
+    d.map_or(x, |d| d.comm.sum_one(x))
 }
 
 /// The maximum over the processes of `x` when split (`x` itself on one).
 pub fn global_max(d: Option<&Decomposition>, x: f64) -> f64 {
-    d.map_or(x, |d| d.max(x))
+    d.map_or(x, |d| d.comm.max_one(x))
 }

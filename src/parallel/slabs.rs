@@ -107,11 +107,6 @@ impl Slabs {
         self.rows(self.rank)
     }
 
-    /// The nodes this rank owns (`nx ny` times its planes).
-    pub fn local_len(&self) -> usize {
-        self.n[0] * self.n[1] * self.my_planes().len()
-    }
-
     /// The rank below (z - 1, periodic) and above (z + 1).
     pub fn neighbours(&self) -> (usize, usize) {
         (

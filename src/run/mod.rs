@@ -298,18 +298,7 @@ pub fn restart_run(
     let checkpoint = &checkpoint::resolve(checkpoint)?;
     let ck = Checkpoint::load(checkpoint)?;
     let run_scene = ck.scene()?;
-    if let Some((file, given)) = &scene
-        && !checkpoint::same_run(given, &run_scene)
-    {
-        return Err(ck
-            .error(format!(
-                "the scene {} is not the one the checkpoint was written with (only the end \
-                 time and the checkpoint interval may change on a restart; see its scene in \
-                 the run directory's scene.ron)",
-                file.display()
-            ))
-            .into());
-    }
+    same_scene(&ck, &run_scene, scene.as_ref())?;
     let dir = match checkpoint.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -442,6 +431,55 @@ fn continue_run(
     drive(run, opts, wall0)
 }
 
+/// An error if `given` (a scene file given with `--restart`, and its scene) is not the scene
+/// `ck` was written with.
+fn same_scene(
+    ck: &Checkpoint,
+    run_scene: &ValidScene,
+    given: Option<&(&Path, ValidScene)>,
+) -> anyhow::Result<()> {
+    match given {
+        Some((file, given)) if !checkpoint::same_run(given, run_scene) => Err(ck
+            .error(format!(
+                "the scene {} is not the one the checkpoint was written with (only the end \
+                 time and the checkpoint interval may change on a restart; see its scene in \
+                 the run directory's scene.ron)",
+                file.display()
+            ))
+            .into()),
+        _ => Ok(()),
+    }
+}
+
+/// The length of `dir`'s file `name` once its data are on the disk (what a checkpoint records
+/// of a time series it will cut back to).
+fn synced_len(dir: &Path, name: &str) -> anyhow::Result<u64> {
+    let path = dir.join(name);
+    let f =
+        std::fs::File::open(&path).with_context(|| format!("cannot open {}", path.display()))?;
+    f.sync_all()
+        .with_context(|| format!("cannot sync {}", path.display()))?;
+    Ok(f.metadata()?.len())
+}
+
+/// Whether a snapshot is due after the step that reached `t` (the step `dt`): the first step at
+/// or after the output time `next_out` (one missed by the rounding of the clock, a sum of steps,
+/// is reached), and the end; then `next_out` moves past `t` (a step longer than `every` passes
+/// several output times: one snapshot).
+fn snapshot_due(t: f64, dt: f64, end: f64, every: Option<f64>, next_out: &mut Option<f64>) -> bool {
+    let slack = LAND_TOLERANCE * dt;
+    let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
+    if !(due(*next_out) || t >= end * (1.0 - 1e-12)) {
+        return false;
+    }
+    if let Some(e) = every {
+        while let Some(o) = next_out.filter(|&o| due(Some(o)) && o + e > o) {
+            *next_out = Some(o + e);
+        }
+    }
+    true
+}
+
 /// The first multiple of `every` after `t`.
 fn next_multiple(t: f64, every: f64) -> f64 {
     let mut k = (t / every).floor() + 1.0;
@@ -463,14 +501,7 @@ impl Run {
             c.flush()?;
         }
         self.snaps.finish()?;
-        let synced_len = |name: &str| -> anyhow::Result<u64> {
-            let path = self.dir.join(name);
-            let f = std::fs::File::open(&path)
-                .with_context(|| format!("cannot open {}", path.display()))?;
-            f.sync_all()
-                .with_context(|| format!("cannot sync {}", path.display()))?;
-            Ok(f.metadata()?.len())
-        };
+        let synced_len = |name: &str| synced_len(&self.dir, name);
         let progress = RunProgress {
             next_out: self.next_out,
             snapshots: self.snaps.count() as u64,
@@ -624,18 +655,9 @@ impl Run {
     /// A snapshot after the first step at or after each output time (with its true time),
     /// and at the end.
     fn snapshot_if_due(&mut self, end: f64, every: Option<f64>) -> anyhow::Result<()> {
-        // An output time missed by the rounding of the clock (a sum of steps) is reached.
-        let t = self.sim.time();
-        let slack = LAND_TOLERANCE * self.sim.sample().dt;
-        let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
-        if due(self.next_out) || t >= end * (1.0 - 1e-12) {
+        let (t, dt) = (self.sim.time(), self.sim.sample().dt);
+        if snapshot_due(t, dt, end, every, &mut self.next_out) {
             write_snapshot(&self.sim, &mut self.snaps)?;
-            if let Some(e) = every {
-                // A step longer than `every` passes several output times: one snapshot.
-                while let Some(o) = self.next_out.filter(|&o| due(Some(o)) && o + e > o) {
-                    self.next_out = Some(o + e);
-                }
-            }
         }
         Ok(())
     }

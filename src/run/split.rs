@@ -29,7 +29,6 @@ use crate::io::runlog::RunLog;
 use crate::parallel::Comm;
 use crate::scene::{OutputFormat, ValidScene};
 use crate::sim::engine::Simulation;
-use crate::systems::diagnostics::LAND_TOLERANCE;
 
 /// What a split run cannot do yet, if the scene asks for it.
 fn unsupported(scene: &ValidScene) -> Option<&'static str> {
@@ -144,17 +143,7 @@ pub fn restart_split(
         .map_err(anyhow::Error::from);
     let (mine, ck0) = agree(&comm, loaded, "read the checkpoint")?;
     let run_scene = ck0.scene()?;
-    if let Some((file, given)) = &scene
-        && !checkpoint::same_run(given, &run_scene)
-    {
-        return Err(ck0
-            .error(format!(
-                "the scene {} is not the one the checkpoint was written with (only the end \
-                 time and the checkpoint interval may change on a restart)",
-                file.display()
-            ))
-            .into());
-    }
+    super::same_scene(&ck0, &run_scene, scene.as_ref())?;
     let scene = apply_overrides(run_scene, opts)?;
     let built = Simulation::builder(scene.clone())
         .add_plugins(&opts.plugins)
@@ -337,12 +326,7 @@ impl Outputs {
         let series_len = match self.series.as_mut() {
             Some(s) => {
                 s.flush()?;
-                let path = self.dir.join("series.csv");
-                let f = std::fs::File::open(&path)
-                    .with_context(|| format!("cannot open {}", path.display()))?;
-                f.sync_all()
-                    .with_context(|| format!("cannot sync {}", path.display()))?;
-                f.metadata()?.len()
+                super::synced_len(&self.dir, "series.csv")?
             }
             None => 0,
         };
@@ -446,15 +430,8 @@ fn drive_split(
                 progress.show(&sim, end);
             }
             let t = sim.time();
-            let slack = LAND_TOLERANCE * sim.sample().dt;
-            let due = |o: Option<f64>| o.is_some_and(|o| t >= o * (1.0 - 1e-12) - slack);
-            if due(out.next_out) || t >= end * (1.0 - 1e-12) {
+            if super::snapshot_due(t, sim.sample().dt, end, every, &mut out.next_out) {
                 out.snapshot(&sim)?;
-                if let Some(e) = every {
-                    while let Some(o) = out.next_out.filter(|&o| due(Some(o)) && o + e > o) {
-                        out.next_out = Some(o + e);
-                    }
-                }
             }
             // Rank 0's clock decides a wall-clock checkpoint; anyone's Ctrl-C stops them all.
             let wall_due =

@@ -20,6 +20,15 @@ pub fn mpirun(np: usize) -> Command {
     cmd
 }
 
+/// A fresh directory for test `tag` holding the scene `text` as `file`.
+fn scratch(tag: &str, file: &str, text: &str) -> Result<std::path::PathBuf, String> {
+    let dir = std::env::temp_dir().join(format!("tumble-mpi-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    std::fs::write(dir.join(file), text).map_err(|e| e.to_string())?;
+    Ok(dir)
+}
+
 /// A Taylor-Green vortex at 24 x 20 x 36 with three snapshots, in double precision.
 const SCENE: &str = r#"Scene(
     name: "tg",
@@ -39,11 +48,8 @@ const VOLUME: f64 = TAU * (5.0 * PI / 3.0) * (3.0 * PI);
 /// names.
 pub fn run_matches_one_process() -> Result<(), String> {
     let tumble = env!("CARGO_BIN_EXE_tumble");
-    let dir = std::env::temp_dir().join(format!("tumble-mpi-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let dir = scratch("run", "tg.ron", SCENE)?;
     let scene = dir.join("tg.ron");
-    std::fs::write(&scene, SCENE).map_err(|e| e.to_string())?;
     let run = |cmd: Option<Command>, out: &str| -> Result<(), String> {
         let mut cmd = match cmd {
             Some(mut c) => {
@@ -215,10 +221,7 @@ fn children(pid: u32) -> Vec<u32> {
 /// checkpoint's pieces are those of an uninterrupted two-process run, byte for byte.
 pub fn killed_and_restarted_is_bit_identical() -> Result<(), String> {
     let tumble = env!("CARGO_BIN_EXE_tumble");
-    let dir = std::env::temp_dir().join(format!("tumble-mpi-kill-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-    std::fs::write(dir.join("tg.ron"), LONG_SCENE).map_err(|e| e.to_string())?;
+    let dir = scratch("kill", "tg.ron", LONG_SCENE)?;
     let start = |out: &str| {
         let mut c = mpirun(2);
         c.arg(tumble)
@@ -284,16 +287,13 @@ pub fn killed_and_restarted_is_bit_identical() -> Result<(), String> {
 /// A scene that cannot split (a body) under `mpirun -np 2`: exit status 2, no run directory.
 pub fn unsplittable_scene_is_refused_and_writes_nothing() -> Result<(), String> {
     let tumble = env!("CARGO_BIN_EXE_tumble");
-    let dir = std::env::temp_dir().join(format!("tumble-mpi-refused-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let scene = r#"Scene(
     domain: (extent: [1.0, 1.0, 1.0], cells: [16, 16, 16]),
     fluid: (viscosity: 0.01),
     numerics: (end_time: 0.01),
     bodies: [(name: "ball", shape: Sphere(radius: 0.2), density: 2.0, position: [0.5, 0.5, 0.5])],
 )"#;
-    std::fs::write(dir.join("ball.ron"), scene).map_err(|e| e.to_string())?;
+    let dir = scratch("refused", "ball.ron", scene)?;
     let st = mpirun(2)
         .arg(tumble)
         .args(["run", "--quiet", "--out", "out", "ball.ron"])
@@ -315,10 +315,7 @@ pub fn unsplittable_scene_is_refused_and_writes_nothing() -> Result<(), String> 
 /// exit status 2 instead of running once per process.
 pub fn other_commands_refuse_several_processes() -> Result<(), String> {
     let tumble = env!("CARGO_BIN_EXE_tumble");
-    let dir = std::env::temp_dir().join(format!("tumble-mpi-check-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-    std::fs::write(dir.join("tg.ron"), SCENE).map_err(|e| e.to_string())?;
+    let dir = scratch("check", "tg.ron", SCENE)?;
     let st = mpirun(2)
         .arg(tumble)
         .args(["check", "tg.ron"])

@@ -72,7 +72,7 @@ fn slabs_split_evenly_and_refuse_what_cannot_split() {
     let s = Slabs::new([8, 8, 26], 4, 3).unwrap();
     assert_eq!(s.planes(3), 20..26);
     assert_eq!(s.neighbours(), (2, 0));
-    assert_eq!(s.local_len(), 8 * 8 * 6);
+    assert_eq!(s.my_planes().len(), 6);
     // Each process needs six planes (the remeshing kernel's reach at the step bound) and one
     // spectral row.
     assert!(matches!(
