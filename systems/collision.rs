@@ -53,7 +53,7 @@ use crate::base::fields::SimTime;
 use crate::base::grid::Grid;
 use crate::bodies::contact::{ContactParams, contact_velocity_change, inverse_inertia};
 use crate::bodies::{
-    Body, BodyShape, ContactPoints, ContactState, GridPatch, Material, RigidState,
+    Body, BodyShape, ContactPoints, ContactState, GridPatch, Material, RigidState, patch_pos,
 };
 use bevy_ecs::prelude::*;
 use glam::DVec3;
@@ -275,9 +275,11 @@ fn body_boxes(
         let (aabb, radius) = match shape.level_set.bounds() {
             Some((lo, hi)) => {
                 // Unwrapped: next to the body, possibly past the box's boundary.
-                let (plo, phi) = (patch.pos(grid, 0, 0, 0), {
-                    let top = patch.dims.map(|d| d.max(1) - 1);
-                    patch.pos(grid, top[0], top[1], top[2])
+                // (The whole box: on a slab the patch holds only its planes.)
+                let (wlo, wdims) = patch.whole;
+                let (plo, phi) = (patch_pos(grid, wlo, 0, 0, 0), {
+                    let top = wdims.map(|d| d.max(1) - 1);
+                    patch_pos(grid, wlo, top[0], top[1], top[2])
                 });
                 let mut mins = PVec::new(plo[0], plo[1], plo[2]);
                 let mut maxs = PVec::new(phi[0], phi[1], phi[2]);

@@ -569,6 +569,9 @@ pub fn diagnostics(
             time.t
         ));
     }
+    if let Some(d) = split.as_deref() {
+        d.agree_failure(&mut failure.reason);
+    }
     diag.keep(s, &grid, &params, &bodies, &mut time);
 }
 

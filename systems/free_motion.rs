@@ -80,7 +80,12 @@ impl crate::schedule::Plugin for FreeMotionPlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         if ctx.mode().vacuum {
-            ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
+            ctx.share_resource(|w| {
+                BodySums::new(
+                    w.resource::<Grid>(),
+                    w.get_resource::<crate::parallel::Decomposition>(),
+                )
+            });
             ctx.add_system(PhysicsSet::FreeMotion, "free_motion", free_motion)?;
         }
         Ok(())

@@ -48,21 +48,33 @@ pub fn level_sets(
             ));
         }
         let offset = wall_offset(&params, body, grid.h);
-        let outside = sample(&grid, body, state, shape, &mut patch, eps, offset);
-        if let Some(axis) = outside
-            && failure.reason.is_none()
-        {
-            failure.reason = Some(format!(
-                "static body `{}` reaches outside the periodic box along {} at step {} \
-                 (t = {:.6}): centre {:?}; a static body's level set is clipped at the box's \
-                 last nodes, not wrapped around (moving bodies are); move it inside or \
-                 enlarge the domain",
-                body.name,
-                ["x", "y", "z"][axis],
-                time.step,
-                time.t,
-                &state.center.to_array()[..grid.dim],
-            ));
+        let sampled = sample(&grid, body, state, shape, &mut patch, eps, offset);
+        if failure.reason.is_some() {
+            continue;
+        }
+        match sampled {
+            Err(SampleError::Outside(axis)) => {
+                failure.reason = Some(format!(
+                    "static body `{}` reaches outside the periodic box along {} at step {} \
+                     (t = {:.6}): centre {:?}; a static body's level set is clipped at the box's \
+                     last nodes, not wrapped around (moving bodies are); move it inside or \
+                     enlarge the domain",
+                    body.name,
+                    ["x", "y", "z"][axis],
+                    time.step,
+                    time.t,
+                    &state.center.to_array()[..grid.dim],
+                ))
+            }
+            Err(SampleError::AroundSlab) => {
+                failure.reason = Some(format!(
+                    "body `{}` spans nearly the whole box along z at step {} (t = {:.6}): its \
+                     patch wraps round a process's slab; on several processes a body must be \
+                     shorter along z than the box less one slab (run on fewer processes)",
+                    body.name, time.step, time.t,
+                ))
+            }
+            Ok(()) => {}
         }
     }
 }
@@ -79,7 +91,8 @@ pub fn level_sets_init(
     let eps = params.numerics.interface_cells * grid.h;
     for (body, state, shape, mut patch) in &mut bodies {
         let offset = wall_offset(&params, body, grid.h);
-        sample(&grid, body, state, shape, &mut patch, eps, offset);
+        // Errors are reported by the first step's `level_sets`.
+        let _ = sample(&grid, body, state, shape, &mut patch, eps, offset);
         patch.sampled = false;
     }
 }
@@ -202,9 +215,15 @@ pub fn sample(
     patch: &mut GridPatch,
     eps: f64,
     offset: f64,
-) -> Option<usize> {
+) -> Result<(), SampleError> {
     let wrap = !body.is_static();
-    let (lo, dims, clipped) = patch_box(grid, state, shape, patch_reach(grid, eps), wrap);
+    let whole = grid.whole();
+    let (lo, dims, clipped) = patch_box(&whole, state, shape, patch_reach(grid, eps), wrap);
+    patch.whole = (lo, dims);
+    let outside = solid_on_clipped_side(&whole, state, shape, (lo, dims), &clipped);
+    let Some((lo, dims)) = slab_part(grid, lo, dims) else {
+        return Err(SampleError::AroundSlab);
+    };
     patch.lo = lo;
     patch.dims = dims;
     let len = dims[0] * dims[1] * dims[2];
@@ -230,7 +249,55 @@ pub fn sample(
             }
         });
     patch.sampled = true;
-    solid_on_clipped_side(grid, state, shape, &patch.phi, (lo, dims), &clipped)
+    match outside {
+        Some(axis) => Err(SampleError::Outside(axis)),
+        None => Ok(()),
+    }
+}
+
+/// Why a body's patch could not be sampled whole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SampleError {
+    /// The solid of a static body reaches the box's boundary along this axis, on a side where
+    /// its patch is clipped.
+    Outside(usize),
+    /// On several processes, the box (wrapping round the periodic z axis) holds both ends of
+    /// this process's slab but not its middle: nearly the whole box's length along z.
+    AroundSlab,
+}
+
+/// The part of a box of the whole grid (first node `lo`, unwrapped, `dims` nodes) that lies in
+/// `grid`'s slab: its first node (at the image next to the box) and node counts, all of the
+/// box unless `grid` is a slab. `None` when the box holds both ends of the slab but not its
+/// middle (it wraps round the z axis, nearly as long as the box).
+pub fn slab_part(
+    grid: &Grid,
+    lo: [isize; 3],
+    dims: [usize; 3],
+) -> Option<([isize; 3], [usize; 3])> {
+    if !grid.is_slab() || dims[2] == 0 {
+        return Some((lo, dims));
+    }
+    let (nzw, nz, d) = (grid.nz_whole as isize, grid.n[2] as isize, dims[2] as isize);
+    // The box's offset of the slab's first plane (at its image at or after the box's start);
+    // the slab's planes are the offsets s..s + nz, wrapping past nzw.
+    let s = (grid.k0 as isize - lo[2]).rem_euclid(nzw);
+    let first = (s < d).then(|| (s, (s + nz).min(d)));
+    let wrapped = (s + nz > nzw).then(|| (0, (s + nz - nzw).min(d)));
+    let (c0, c1) = match (first, wrapped) {
+        (Some(a), Some(b)) if b.1 > 0 => {
+            let _ = a;
+            return None;
+        }
+        (Some(a), _) => a,
+        (None, Some(b)) => b,
+        (None, None) => (0, 0),
+    };
+    let mut lo = lo;
+    let mut dims = dims;
+    lo[2] += c0;
+    dims[2] = (c1 - c0).max(0) as usize;
+    Some((lo, dims))
 }
 
 /// The first axis along which the solid (φ > 0) reaches the periodic box's boundary on a
@@ -242,7 +309,6 @@ fn solid_on_clipped_side(
     grid: &Grid,
     state: &RigidState,
     shape: &BodyShape,
-    phi: &[f64],
     (lo, dims): ([isize; 3], [usize; 3]),
     clipped: &Clipped,
 ) -> Option<usize> {
@@ -258,9 +324,10 @@ fn solid_on_clipped_side(
                     let mut ijk = [0; 3];
                     ijk[b] = ib;
                     ijk[c] = ic;
-                    if side == 0 {
-                        ijk[a] = 0;
-                        phi[ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])] > 0.0
+                    // On the side below the patch's first node is node 0 (the patch
+                    // starts there: `patch_pos` of it, bit for bit); above, the boundary.
+                    let p = if side == 0 {
+                        patch_pos(grid, lo, ijk[0], ijk[1], ijk[2])
                     } else {
                         let mut x = [0.0; 3];
                         for d in 0..3 {
@@ -270,9 +337,10 @@ fn solid_on_clipped_side(
                         if grid.dim == 2 {
                             x[2] = 0.0;
                         }
-                        let w = DVec3::new(x[0], x[1], x[2]);
-                        shape.level_set.phi(inv * (w - state.center)) > 0.0
-                    }
+                        x
+                    };
+                    let w = DVec3::new(p[0], p[1], p[2]);
+                    shape.level_set.phi(inv * (w - state.center)) > 0.0
                 })
             })
         })

@@ -49,10 +49,13 @@ use crate::bodies::coupling::{MotionLaw, VirtualMass};
 use crate::bodies::integrals::solve_inertia;
 use crate::bodies::markers::{Markers, Stencil};
 use crate::bodies::{Body, GridPatch, Material, RigidState, ShapeVolume};
+use crate::parallel::{Comm, Decomposition};
 use crate::solvers::Spectral;
+use crate::solvers::operators::CurlHalo;
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// The solve stops when the slip left at the markers is below this fraction of the slip the
 /// step made (the norm over all markers, and of the carried forcing when it is larger) ...
@@ -99,6 +102,12 @@ pub struct NoSlip {
     carried: Vec<DVec3>,
     /// Iterations of the last solve (0 when it did not run).
     pub iterations: usize,
+    /// On several processes: their communicator (each interpolates from its slab's nodes;
+    /// the values at the markers are the sums over them, so every process holds all the
+    /// markers and solves the same system), a flat buffer for those sums, and the curl's halo.
+    split: Option<Arc<Comm>>,
+    flat: Vec<f64>,
+    curl_halo: CurlHalo,
 }
 
 /// A checkpoint keeps the last forces (the first guess), so a restart continues as the run.
@@ -157,13 +166,15 @@ impl Recoil {
 
 impl NoSlip {
     /// Scratch for `grid` (the markers' buffers are sized before the first step).
-    pub fn new(grid: &Grid) -> Self {
+    pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
         let n = grid.len();
         let field = || vec![vec![0.0; n]; grid.dim];
         NoSlip {
             p_grid: field(),
             kp_grid: field(),
             scratch: vec![0.0; n],
+            split: split.map(|d| d.comm.clone()),
+            curl_halo: CurlHalo::of_grid(grid, split),
             ..Default::default()
         }
     }
@@ -191,7 +202,25 @@ impl NoSlip {
             v.reserve(total.saturating_sub(v.len()));
         }
         self.nodes.reserve(total.saturating_sub(self.nodes.len()));
+        if self.split.is_some() {
+            self.flat
+                .reserve((3 * total).saturating_sub(self.flat.len()));
+        }
         self.bodies.reserve(self.last.len());
+    }
+}
+
+/// On several processes, `v` (values at the markers, each the part of one slab) summed over
+/// them, in rank order, through the flat buffer `flat`; nothing on one.
+fn sum_markers(split: Option<&Comm>, flat: &mut Vec<f64>, v: &mut [DVec3]) {
+    let Some(c) = split else {
+        return;
+    };
+    flat.clear();
+    flat.extend(v.iter().flat_map(|x| x.to_array()));
+    c.sum(flat);
+    for (x, f) in v.iter_mut().zip(flat.chunks_exact(3)) {
+        *x = DVec3::new(f[0], f[1], f[2]);
     }
 }
 
@@ -218,7 +247,7 @@ type NewtonBodies<'w, 's> = Query<
 
 /// Whether a body is in the solve: dynamic, moving by Newton-Euler, on the grid.
 fn in_solve(law: &MotionLaw, body: &Body, patch: &GridPatch) -> bool {
-    *law == MotionLaw::NewtonEuler && body.is_dynamic() && !patch.is_empty()
+    *law == MotionLaw::NewtonEuler && body.is_dynamic() && patch.on_grid()
 }
 
 /// The last forces of body `id` when they are one per marker of its `n` (none before its
@@ -273,10 +302,10 @@ pub fn noslip(
             let rv = pos - state.centroid;
             let ubar = state.velocity + state.angular_velocity.cross(rv);
             let st = Stencil::at(&grid, pos);
-            let u = st.interpolate(&grid, &fields.u);
+            // u at the marker (on a slab its part, summed below); ū kept in x meanwhile.
             ns.nodes.push((st, rv));
-            ns.r.push(ubar - u);
-            ns.x.push(DVec3::ZERO);
+            ns.r.push(st.interpolate(&grid, &fields.u));
+            ns.x.push(ubar);
         }
         // E + M_v (`VirtualMass`): positive for every body.
         let (e, j_e) = excess(mat, volume, virt, state, rho_f);
@@ -296,6 +325,12 @@ pub fn noslip(
     }
     if ns.nodes.is_empty() {
         return;
+    }
+    // The slip ū - u at the markers; x starts from zero.
+    sum_markers(ns.split.as_deref(), &mut ns.flat, &mut ns.r);
+    for (r, x) in ns.r.iter_mut().zip(ns.x.iter_mut()) {
+        *r = *x - *r;
+        *x = DVec3::ZERO;
     }
     let m = ns.nodes.len();
     let nu_dt = params.nu * time.dt;
@@ -442,7 +477,7 @@ pub fn carry(
     if !any {
         return;
     }
-    crate::solvers::operators::curl_add(&grid, &ns.p_grid, fields.omega_mut());
+    crate::solvers::operators::curl_add(&grid, &ns.p_grid, fields.omega_mut(), ns.curl_halo.get());
     for (_, body, patch, state, law, _, _, _, markers) in &bodies {
         if !in_solve(law, body, patch) {
             continue;
@@ -491,6 +526,7 @@ fn apply(ns: &mut NoSlip, grid: &Grid, spectral: &mut Spectral, nu_dt: f64, dv: 
     for ((st, _), ap) in ns.nodes.iter().zip(ns.ap.iter_mut()) {
         *ap = st.interpolate(grid, &ns.kp_grid);
     }
+    sum_markers(ns.split.as_deref(), &mut ns.flat, &mut ns.ap);
     for rec in ns.bodies.iter_mut() {
         let (lo, hi) = rec.range;
         let (mut pf, mut pl) = (DVec3::ZERO, DVec3::ZERO);
@@ -531,7 +567,12 @@ impl crate::schedule::Plugin for NoSlipPlugin {
         {
             return Ok(());
         }
-        ctx.share_resource(|w| NoSlip::new(w.resource::<Grid>()));
+        ctx.share_resource(|w| {
+            NoSlip::new(
+                w.resource::<Grid>(),
+                w.get_resource::<crate::parallel::Decomposition>(),
+            )
+        });
         ctx.share_resource(|w| {
             Spectral::of_grid(
                 w.resource::<crate::base::grid::Grid>(),

@@ -38,7 +38,7 @@ use crate::bodies::contact::contact_velocity_change;
 use crate::bodies::coupling::MotionLaw;
 use crate::bodies::integrals::{BodySums, rigid_region};
 use crate::bodies::{Body, BodyFields, ContactState, GridPatch, Hydro, Material, RigidState};
-use crate::solvers::operators::curl_add;
+use crate::solvers::operators::{CurlHalo, curl_add};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -52,6 +52,7 @@ pub fn penalization(
     mut fields: ResMut<Fields>,
     mut bf: ResMut<BodyFields>,
     mut sums: ResMut<BodySums>,
+    mut halo: ResMut<CurlHalo>,
     mut bodies: Query<(
         &Body,
         &GridPatch,
@@ -107,13 +108,12 @@ pub fn penalization(
             // momentum balance, reported by `rigid_velocity`.
             let own_force = !(dynamic && (momentum || pressure));
             let [dx, dy, _] = patch.dims;
-            if patch.is_empty() {
-                if own_force {
-                    *hydro = Hydro::default();
-                }
-                continue;
-            }
-            let rows = patch.len() / dx;
+            // (A process whose slab holds none of the patch adds zero to the force.)
+            let rows = if patch.is_empty() {
+                0
+            } else {
+                patch.len() / dx
+            };
             let u = component_ptrs(&mut fields.u);
             let du = component_ptrs(&mut bf.du);
             let rho = &bf.rho;
@@ -165,20 +165,24 @@ pub fn penalization(
                     acc[3..6].copy_from_slice(&m.to_array());
                 });
             if own_force {
-                let mut force = DVec3::ZERO;
-                let mut torque = DVec3::ZERO;
+                let mut t = [0.0; 6];
                 for s in &sums.rows_mut()[..rows] {
-                    force += DVec3::new(s[0], s[1], s[2]);
-                    torque += DVec3::new(s[3], s[4], s[5]);
+                    for (t, v) in t.iter_mut().zip(s) {
+                        *t += v;
+                    }
                 }
-                *hydro = Hydro { force, torque };
+                sums.global(&mut t);
+                *hydro = Hydro {
+                    force: DVec3::new(t[0], t[1], t[2]),
+                    torque: DVec3::new(t[3], t[4], t[5]),
+                };
             }
         }
     }
     // Under the pressure projection the increment is projected with the density first
     // (`pressure`), which then adds its curl.
     if !pressure {
-        curl_add(&grid, &bf.du, fields.omega_mut());
+        curl_add(&grid, &bf.du, fields.omega_mut(), halo.get());
     }
 }
 
@@ -195,7 +199,18 @@ impl crate::schedule::Plugin for PenalizationPlugin {
         use crate::schedule::PhysicsSet;
         let mode = ctx.mode();
         if mode.fluid() && mode.has_bodies() {
-            ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
+            ctx.share_resource(|w| {
+                BodySums::new(
+                    w.resource::<Grid>(),
+                    w.get_resource::<crate::parallel::Decomposition>(),
+                )
+            });
+            ctx.share_resource(|w| {
+                crate::solvers::operators::CurlHalo::of_grid(
+                    w.resource::<crate::base::grid::Grid>(),
+                    w.get_resource::<crate::parallel::Decomposition>(),
+                )
+            });
             ctx.add_system(PhysicsSet::Penalization, "penalization", penalization)?;
         }
         Ok(())

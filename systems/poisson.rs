@@ -35,6 +35,7 @@ pub fn vorticity(
     grid: Res<crate::base::grid::Grid>,
     time: Res<SimTime>,
     mut fields: ResMut<Fields>,
+    mut halo: ResMut<crate::solvers::operators::CurlHalo>,
 ) {
     let fields = &mut *fields;
     fields.dt_prev = time.dt;
@@ -42,7 +43,7 @@ pub fn vorticity(
     for w in omega.iter_mut() {
         w.par_iter_mut().for_each(|x| *x = 0.0);
     }
-    crate::solvers::operators::curl_add(&grid, u, omega);
+    crate::solvers::operators::curl_add(&grid, u, omega, halo.get());
 }
 
 /// Velocity from vorticity: at startup in every run, every step in a fluid run.
@@ -65,6 +66,12 @@ impl crate::schedule::Plugin for PoissonPlugin {
         ctx.add_startup_system_in(PhysicsSet::Poisson, "poisson", poisson)?;
         let momentum = ctx.world.resource::<Params>().momentum_form();
         if ctx.mode().fluid() && momentum {
+            ctx.share_resource(|w| {
+                crate::solvers::operators::CurlHalo::of_grid(
+                    w.resource::<crate::base::grid::Grid>(),
+                    w.get_resource::<crate::parallel::Decomposition>(),
+                )
+            });
             ctx.add_system(PhysicsSet::Poisson, "vorticity", vorticity)?;
         } else if ctx.mode().fluid() {
             ctx.add_system(PhysicsSet::Poisson, "poisson", poisson)?;

@@ -76,8 +76,10 @@ use crate::base::params::BodyCoupling;
 use crate::bodies::coupling::{ExcessMomentum, PressureState};
 use crate::bodies::integrals::{BodySums, integrate_n, penalized_weight};
 use crate::bodies::{Body, BodyFields, GridPatch, RigidState};
+use crate::parallel::halo::z_line;
+use crate::parallel::{Decomposition, Halo};
 use crate::solvers::Spectral;
-use crate::solvers::operators::curl_add;
+use crate::solvers::operators::{CurlHalo, curl_add};
 use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
@@ -103,14 +105,27 @@ pub struct PressureSolver {
     potential: Vec<f64>,
     /// Per-row partial sums of the potential's interface mean (scratch).
     potential_partial: Vec<[f64; 2]>,
+    /// On several processes: one ghost plane a side of three fields, for the differences
+    /// along z.
+    halo: Option<Halo>,
+    /// The curl's halo.
+    curl_halo: CurlHalo,
 }
 
 impl PressureSolver {
     /// Zero state for `grid`; with `multigrid`, the Poisson solver's multigrid hierarchy too.
-    pub fn new(grid: &Grid, multigrid: bool, rigid_walls: bool, momentum: bool) -> Self {
+    pub fn new(
+        grid: &Grid,
+        multigrid: bool,
+        rigid_walls: bool,
+        momentum: bool,
+        split: Option<&Decomposition>,
+    ) -> Self {
         let n = grid.len();
         PressureSolver {
-            poisson: VariablePoisson::new(grid, multigrid),
+            halo: split.map(|d| Halo::new(grid, d, 1, 3)),
+            curl_halo: CurlHalo::of_grid(grid, split),
+            poisson: VariablePoisson::new(grid, multigrid, split),
             src: vec![vec![0.0; n]; grid.dim],
             trial: vec![vec![0.0; n]; grid.dim],
             rigid_rho: if rigid_walls {
@@ -199,11 +214,22 @@ pub fn pressure(
     let dt = time.dt;
     let ldt = params.numerics.lambda * dt;
     if solver.rigid_rho.is_empty() {
-        face_beta(&grid, &bf.rho, &mut solver.poisson.beta);
+        face_beta(
+            &grid,
+            &bf.rho,
+            &mut solver.poisson.beta,
+            solver.halo.as_mut(),
+        );
     } else {
         rigid_walls(&grid, &bodies, &bf.rho, ldt, &mut solver.rigid_rho);
-        face_beta(&grid, &solver.rigid_rho, &mut solver.poisson.beta);
+        face_beta(
+            &grid,
+            &solver.rigid_rho,
+            &mut solver.poisson.beta,
+            solver.halo.as_mut(),
+        );
     }
+    solver.poisson.fill_beta_halo(&grid);
     let momentum = params.momentum_form();
     let mut gravity = face_gravity(
         &grid,
@@ -223,7 +249,14 @@ pub fn pressure(
                 .for_each(|(s, u)| s.copy_from_slice(u));
         }
     } else {
-        node_increment(&grid, &fields.u, &bf.du, dt, &mut solver.src);
+        node_increment(
+            &grid,
+            &fields.u,
+            &bf.du,
+            dt,
+            &mut solver.src,
+            solver.halo.as_mut(),
+        );
     }
     divergence(&grid, solver, &bf.rho_phase, gravity);
     solve_phi(&grid, &mut solver.poisson, &mut state.phi, &mut spectral);
@@ -235,7 +268,7 @@ pub fn pressure(
                 .for_each(|(u, t)| u.copy_from_slice(t));
         }
     } else {
-        curl_add(&grid, &bf.du, fields.omega_mut());
+        curl_add(&grid, &bf.du, fields.omega_mut(), solver.curl_halo.get());
     }
     excess_momentum(&grid, &bodies, bf, &solver.trial, &mut sums, state, ldt);
 }
@@ -349,8 +382,14 @@ fn rigid_walls(
 
 /// β on the faces: β_a = 2 / (ρ_lo + ρ_hi) on the face between nodes `lo` and
 /// `hi = lo + e_a`, stored at `lo`.
-fn face_beta(grid: &Grid, rho: &[f64], beta: &mut [Vec<f64>]) {
+fn face_beta(grid: &Grid, rho: &[f64], beta: &mut [Vec<f64>], halo: Option<&mut Halo>) {
     let nx = grid.n[0];
+    let halo = halo.map(|h| {
+        if grid.dim == 3 {
+            h.fill_one(0, rho);
+        }
+        &*h
+    });
     for (a, beta) in beta.iter_mut().enumerate().take(grid.dim) {
         beta.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
             let rn = RowNeighbours::new(grid, row);
@@ -358,7 +397,11 @@ fn face_beta(grid: &Grid, rho: &[f64], beta: &mut [Vec<f64>]) {
             if a == 0 {
                 for_row(nx, |i, _, ip| o[i] = 2.0 / (rc[i] + rc[ip]));
             } else {
-                let up = &rho[rn.above[a - 1]..rn.above[a - 1] + nx];
+                let up = if a == 2 {
+                    z_line(grid, rho, halo, 0, row, 1)
+                } else {
+                    &rho[rn.above[0]..rn.above[0] + nx]
+                };
                 for ((v, c), p) in o.iter_mut().zip(rc).zip(up) {
                     *v = 2.0 / (c + p);
                 }
@@ -388,8 +431,21 @@ fn face_gravity(
 }
 
 /// The node part of the increment, s = δu_pen - Δt (u·∇)u (centred differences), into `src`.
-fn node_increment(grid: &Grid, u: &[Vec<f64>], du: &[Vec<f64>], dt: f64, src: &mut [Vec<f64>]) {
+fn node_increment(
+    grid: &Grid,
+    u: &[Vec<f64>],
+    du: &[Vec<f64>],
+    dt: f64,
+    src: &mut [Vec<f64>],
+    halo: Option<&mut Halo>,
+) {
     let (dim, nx) = (grid.dim, grid.n[0]);
+    let halo = halo.map(|h| {
+        if dim == 3 {
+            h.fill(u);
+        }
+        &*h
+    });
     let inv2h = 0.5 / grid.h;
     let src = crate::base::grid::component_ptrs(src);
     let three = dim == 3;
@@ -407,8 +463,8 @@ fn node_increment(grid: &Grid, u: &[Vec<f64>], du: &[Vec<f64>], dt: f64, src: &m
             );
             let (zm, zp) = if three {
                 (
-                    line_at(&u[q], rn.below[1], nx),
-                    line_at(&u[q], rn.above[1], nx),
+                    z_line(grid, &u[q], halo, q, row, -1),
+                    z_line(grid, &u[q], halo, q, row, 1),
                 )
             } else {
                 (uq, uq)
@@ -430,80 +486,105 @@ fn node_increment(grid: &Grid, u: &[Vec<f64>], du: &[Vec<f64>], dt: f64, src: &m
 /// `src`, times h² (A's scaling): A φ = -h² b, into the solver's `rhs`.
 fn divergence(grid: &Grid, solver: &mut PressureSolver, phase: &[f64], gravity: FaceGravity) {
     let (dim, nx, h) = (grid.dim, grid.n[0], grid.h);
-    let (src, beta) = (&solver.src, &solver.poisson.beta);
     // The reduced form's potential (the phase density stands in when it is not used).
     let pot: &[f64] = if solver.potential.is_empty() {
         phase
     } else {
         &solver.potential
     };
-    solver
-        .poisson
-        .rhs
-        .par_chunks_mut(nx)
-        .enumerate()
-        .for_each(|(row, o)| {
-            let rn = RowNeighbours::new(grid, row);
-            // The face between lo and hi = lo + e_a, from the values at both nodes and β
-            // on it.
-            let face = |a: usize, s: [f64; 2], ph: [f64; 2], pt: [f64; 2], b: f64| {
-                0.5 * (s[0] + s[1]) + gravity.impulse(a, ph, pt) * b
-            };
-            let ph = line_at(phase, rn.c0, nx);
-            let pc = line_at(pot, rn.c0, nx);
-            let (s0, b0) = (line_at(&src[0], rn.c0, nx), line_at(&beta[0], rn.c0, nx));
-            // Per axis 1 and 2: the source, phase, potential and β rows of this row and of the
-            // rows below and above it.
-            let rows = |a: usize| {
-                let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
-                (
+    // On a slab: the source's z component, the phase density and the potential one plane
+    // beyond it (0, 1, 2), β along z's from the Poisson solver's halo.
+    if let Some(h) = solver.halo.as_mut()
+        && dim == 3
+    {
+        h.fill(&[&solver.src[2][..], phase, pot]);
+    }
+    let halo = solver.halo.as_ref();
+    let src = &solver.src;
+    let (rhs, beta, beta_halo) = solver.poisson.rhs_beta();
+    rhs.par_chunks_mut(nx).enumerate().for_each(|(row, o)| {
+        let rn = RowNeighbours::new(grid, row);
+        // The face between lo and hi = lo + e_a, from the values at both nodes and β
+        // on it.
+        let face = |a: usize, s: [f64; 2], ph: [f64; 2], pt: [f64; 2], b: f64| {
+            0.5 * (s[0] + s[1]) + gravity.impulse(a, ph, pt) * b
+        };
+        let ph = line_at(phase, rn.c0, nx);
+        let pc = line_at(pot, rn.c0, nx);
+        let (s0, b0) = (line_at(&src[0], rn.c0, nx), line_at(&beta[0], rn.c0, nx));
+        // Per axis 1 and 2: the source, phase, potential and β rows of this row and of the
+        // rows below and above it.
+        let rows = |a: usize| {
+            if a == 2 {
+                return (
                     [
-                        line_at(&src[a], m, nx),
-                        line_at(&src[a], rn.c0, nx),
-                        line_at(&src[a], p, nx),
+                        z_line(grid, &src[2], halo, 0, row, -1),
+                        line_at(&src[2], rn.c0, nx),
+                        z_line(grid, &src[2], halo, 0, row, 1),
                     ],
-                    [line_at(phase, m, nx), line_at(phase, p, nx)],
-                    [line_at(pot, m, nx), line_at(pot, p, nx)],
-                    [line_at(&beta[a], m, nx), line_at(&beta[a], rn.c0, nx)],
-                )
-            };
-            let (s1, p1, q1, b1) = rows(1);
-            let (s2, p2, q2, b2) = if dim == 3 { rows(2) } else { (s1, p1, q1, b1) };
-            for_row(nx, |i, im, ip| {
-                let mut div = 0.0;
-                div += face(0, [s0[i], s0[ip]], [ph[i], ph[ip]], [pc[i], pc[ip]], b0[i])
-                    - face(0, [s0[im], s0[i]], [ph[im], ph[i]], [pc[im], pc[i]], b0[im]);
-                div += face(
-                    1,
-                    [s1[1][i], s1[2][i]],
-                    [ph[i], p1[1][i]],
-                    [pc[i], q1[1][i]],
-                    b1[1][i],
-                ) - face(
-                    1,
-                    [s1[0][i], s1[1][i]],
-                    [p1[0][i], ph[i]],
-                    [q1[0][i], pc[i]],
-                    b1[0][i],
+                    [
+                        z_line(grid, phase, halo, 1, row, -1),
+                        z_line(grid, phase, halo, 1, row, 1),
+                    ],
+                    [
+                        z_line(grid, pot, halo, 2, row, -1),
+                        z_line(grid, pot, halo, 2, row, 1),
+                    ],
+                    [
+                        z_line(grid, &beta[2], beta_halo, 1, row, -1),
+                        line_at(&beta[2], rn.c0, nx),
+                    ],
                 );
-                if dim == 3 {
-                    div += face(
-                        2,
-                        [s2[1][i], s2[2][i]],
-                        [ph[i], p2[1][i]],
-                        [pc[i], q2[1][i]],
-                        b2[1][i],
-                    ) - face(
-                        2,
-                        [s2[0][i], s2[1][i]],
-                        [p2[0][i], ph[i]],
-                        [q2[0][i], pc[i]],
-                        b2[0][i],
-                    );
-                }
-                o[i] = -h * div;
-            });
+            }
+            let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
+            (
+                [
+                    line_at(&src[a], m, nx),
+                    line_at(&src[a], rn.c0, nx),
+                    line_at(&src[a], p, nx),
+                ],
+                [line_at(phase, m, nx), line_at(phase, p, nx)],
+                [line_at(pot, m, nx), line_at(pot, p, nx)],
+                [line_at(&beta[a], m, nx), line_at(&beta[a], rn.c0, nx)],
+            )
+        };
+        let (s1, p1, q1, b1) = rows(1);
+        let (s2, p2, q2, b2) = if dim == 3 { rows(2) } else { (s1, p1, q1, b1) };
+        for_row(nx, |i, im, ip| {
+            let mut div = 0.0;
+            div += face(0, [s0[i], s0[ip]], [ph[i], ph[ip]], [pc[i], pc[ip]], b0[i])
+                - face(0, [s0[im], s0[i]], [ph[im], ph[i]], [pc[im], pc[i]], b0[im]);
+            div += face(
+                1,
+                [s1[1][i], s1[2][i]],
+                [ph[i], p1[1][i]],
+                [pc[i], q1[1][i]],
+                b1[1][i],
+            ) - face(
+                1,
+                [s1[0][i], s1[1][i]],
+                [p1[0][i], ph[i]],
+                [q1[0][i], pc[i]],
+                b1[0][i],
+            );
+            if dim == 3 {
+                div += face(
+                    2,
+                    [s2[1][i], s2[2][i]],
+                    [ph[i], p2[1][i]],
+                    [pc[i], q2[1][i]],
+                    b2[1][i],
+                ) - face(
+                    2,
+                    [s2[0][i], s2[1][i]],
+                    [p2[0][i], ph[i]],
+                    [q2[0][i], pc[i]],
+                    b2[0][i],
+                );
+            }
+            o[i] = -h * div;
         });
+    });
 }
 
 /// φ = Δt p' from -∇·(β∇φ) = -b (conjugate gradients to [`TOLERANCE`], warm-started from
@@ -531,13 +612,22 @@ fn project(
     gravity: FaceGravity,
 ) {
     let (dim, nx) = (grid.dim, grid.n[0]);
-    let beta = &solver.poisson.beta;
     let phase = &bf.rho_phase;
     let pot: &[f64] = if solver.potential.is_empty() {
         phase
     } else {
         &solver.potential
     };
+    // On a slab: the phase density, the potential and φ one plane beyond it (0, 1, 2), β
+    // along z's from the Poisson solver's halo.
+    if let Some(h) = solver.halo.as_mut()
+        && dim == 3
+    {
+        h.fill(&[phase, pot, phi]);
+    }
+    let halo = solver.halo.as_ref();
+    let beta_halo = solver.poisson.beta_halo();
+    let beta = &solver.poisson.beta;
     let trial = crate::base::grid::component_ptrs(&mut solver.trial);
     let du = crate::base::grid::component_ptrs(&mut bf.du);
     let inv_h = 1.0 / grid.h;
@@ -568,10 +658,30 @@ fn project(
                 });
             } else {
                 let (m, p) = (rn.below[a - 1], rn.above[a - 1]);
-                let (phm, php) = (line_at(phase, m, nx), line_at(phase, p, nx));
-                let (pm, pp) = (line_at(pot, m, nx), line_at(pot, p, nx));
-                let (fm, fp) = (line_at(phi, m, nx), line_at(phi, p, nx));
-                let bm = line_at(&beta[a], m, nx);
+                let ((phm, php), (pm, pp), (fm, fp), bm) = if a == 2 {
+                    (
+                        (
+                            z_line(grid, phase, halo, 0, row, -1),
+                            z_line(grid, phase, halo, 0, row, 1),
+                        ),
+                        (
+                            z_line(grid, pot, halo, 1, row, -1),
+                            z_line(grid, pot, halo, 1, row, 1),
+                        ),
+                        (
+                            z_line(grid, phi, halo, 2, row, -1),
+                            z_line(grid, phi, halo, 2, row, 1),
+                        ),
+                        z_line(grid, &beta[2], beta_halo, 1, row, -1),
+                    )
+                } else {
+                    (
+                        (line_at(phase, m, nx), line_at(phase, p, nx)),
+                        (line_at(pot, m, nx), line_at(pot, p, nx)),
+                        (line_at(phi, m, nx), line_at(phi, p, nx)),
+                        line_at(&beta[a], m, nx),
+                    )
+                };
                 for i in 0..nx {
                     let corr = 0.5
                         * (face(a, [phm[i], ph[i]], [pm[i], pc[i]], [fm[i], fc[i]], bm[i])
@@ -644,14 +754,29 @@ impl crate::schedule::Plugin for PressurePlugin {
                     w.get_resource::<crate::parallel::Decomposition>(),
                 )
             });
-            ctx.share_resource(|w| BodySums::new(w.resource::<Grid>()));
+            ctx.share_resource(|w| {
+                BodySums::new(
+                    w.resource::<Grid>(),
+                    w.get_resource::<crate::parallel::Decomposition>(),
+                )
+            });
             let grid = ctx.world.resource::<Grid>().clone();
             let multigrid = ctx.world.resource::<Params>().multigrid;
             // Walls rigid in the projection need the multigrid preconditioner (a contrast of
             // λΔt); without a hierarchy (a grid that does not coarsen) they stay fluid.
             let rigid_walls = ctx.world.resource::<Params>().free_surface && multigrid;
             let momentum = ctx.world.resource::<Params>().momentum_form();
-            ctx.insert_resource(PressureSolver::new(&grid, multigrid, rigid_walls, momentum));
+            let split = ctx
+                .world
+                .get_resource::<crate::parallel::Decomposition>()
+                .cloned();
+            ctx.insert_resource(PressureSolver::new(
+                &grid,
+                multigrid,
+                rigid_walls,
+                momentum,
+                split.as_ref(),
+            ));
             // One slot per body id (the bodies are spawned before the plugins are built), so
             // the step does not allocate.
             let ids = ctx

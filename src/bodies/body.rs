@@ -157,6 +157,11 @@ pub struct GridPatch {
     pub chi: Vec<f64>,
     /// Whether the patch holds the current pose (static bodies are sampled once).
     pub sampled: bool,
+    /// The body's whole box (`lo`, `dims` of the whole grid): on several processes a slab's
+    /// patch holds only the box's planes in the slab (possibly none), while this is the same
+    /// on every process (what the broad phase and the choice of the bodies in a step's sums
+    /// read). Equal to (`lo`, `dims`) on one process.
+    pub whole: ([isize; 3], [usize; 3]),
 }
 
 /// The grid nodes of one patch row along x: node `a` of the row is grid node
@@ -185,14 +190,24 @@ impl GridPatch {
     pub fn len(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
     }
-    /// Whether the patch is empty.
+    /// Whether the patch is empty (on a slab: holds none of the slab's nodes).
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
-    /// Grid index (wrapped) along `axis` of the patch's node `a` on that axis.
+    /// Whether the body's whole box holds grid nodes (the same on every process).
+    pub fn on_grid(&self) -> bool {
+        self.whole.1.iter().all(|&d| d > 0)
+    }
+    /// Grid index (wrapped) along `axis` of the patch's node `a` on that axis. Along z the
+    /// box wraps in the whole grid and the index is the slab's (a slab's patch holds only its
+    /// own planes).
     #[inline(always)]
     pub fn wrapped(&self, grid: &Grid, axis: usize, a: usize) -> usize {
-        (self.lo[axis] + a as isize).rem_euclid(grid.n[axis] as isize) as usize
+        if axis == 2 {
+            (self.lo[2] + a as isize).rem_euclid(grid.nz_whole as isize) as usize - grid.k0
+        } else {
+            (self.lo[axis] + a as isize).rem_euclid(grid.n[axis] as isize) as usize
+        }
     }
     /// Grid index of patch node `(a, b, c)`, wrapped into the periodic grid.
     #[inline]

@@ -2,18 +2,24 @@
 //! inertia of a weight χ (the rigid velocity of paper eq. 7, the mass properties of a body in
 //! vacuum, the excess momentum of the pressure projection), several weights in one pass, with
 //! the per-row partial sums preallocated in [`BodySums`]. Sums are taken per patch row and added
-//! in row order, so they do not depend on the number of threads.
+//! in row order, so they do not depend on the number of threads. On several processes each
+//! sums the rows of its slab and the processes' sums are added in rank order
+//! ([`crate::parallel::Comm::sum`]): every process gets the same moments, bit for bit.
 
 use crate::base::grid::Grid;
 use crate::bodies::{Body, GridPatch, RigidState, kinematic_velocity};
+use crate::parallel::{Comm, Decomposition};
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 
-/// Per-row partial sums (preallocated, so a step allocates nothing).
+/// Per-row partial sums (preallocated, so a step allocates nothing), and the processes whose
+/// sums make a whole body's when the grid is split.
 #[derive(Resource, Debug, Clone)]
 pub struct BodySums {
     rows: Vec<[f64; 16]>,
+    comm: Option<Arc<Comm>>,
 }
 
 impl BodySums {
@@ -22,10 +28,20 @@ impl BodySums {
         &mut self.rows
     }
 
-    /// Room for the largest patch of `grid` (ny nz rows), [`MAX_WEIGHTS`] weights a row.
-    pub fn new(grid: &Grid) -> Self {
+    /// Room for the largest patch of `grid` (ny nz rows), [`MAX_WEIGHTS`] weights a row; with
+    /// `split`, the patch sums are added over its processes.
+    pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
         BodySums {
             rows: vec![[0.0; 16]; MAX_WEIGHTS * grid.n[1] * grid.n[2]],
+            comm: split.map(|d| d.comm.clone()),
+        }
+    }
+
+    /// Adds `v` over the processes (in rank order, the same bits on each) when split; every
+    /// process must call it, for the same bodies in the same order.
+    pub fn global(&self, v: &mut [f64]) {
+        if let Some(c) = &self.comm {
+            c.sum(v);
         }
     }
 }
@@ -102,16 +118,17 @@ pub fn integrate_n<const N: usize>(
     const ZERO: [f64; 16] = [0.0; 16];
     let [dx, dy, _] = patch.dims;
     let empty = (0.0, center, DVec3::ZERO, DVec3::ZERO, DMat3::ZERO);
-    if patch.is_empty() {
-        return [empty; N];
-    }
-    let rows = patch.len() / dx;
-    let dv = grid.cell_volume();
-    let dim = grid.dim;
     assert!(
         N <= MAX_WEIGHTS,
         "integrate_n: at most {MAX_WEIGHTS} weights"
     );
+    let dv = grid.cell_volume();
+    let dim = grid.dim;
+    let rows = if patch.is_empty() {
+        0
+    } else {
+        patch.len() / dx
+    };
     sums.rows[..N * rows]
         .par_chunks_mut(N)
         .enumerate()
@@ -155,15 +172,16 @@ pub fn integrate_n<const N: usize>(
             }
             acc.copy_from_slice(&s);
         });
-    std::array::from_fn(|q| {
-        let mut t = [0.0; 16];
-        for s in sums.rows[..N * rows].chunks(N) {
-            for (t, v) in t.iter_mut().zip(&s[q]) {
+    let mut t = [ZERO; N];
+    for s in sums.rows[..N * rows].chunks(N) {
+        for (t, s) in t.iter_mut().zip(s) {
+            for (t, v) in t.iter_mut().zip(s) {
                 *t += v;
             }
         }
-        moments(center, dv, t).unwrap_or(empty)
-    })
+    }
+    sums.global(t.as_flattened_mut());
+    std::array::from_fn(|q| moments(center, dv, t[q]).unwrap_or(empty))
 }
 
 /// The moments from the weight's sums `t` (before the cell volume `dv`); `None` when ∫χ is 0.

@@ -233,17 +233,22 @@ impl Stencil {
         st
     }
 
-    /// Visits the stencil's nodes (wrapped into the periodic grid) with their weights.
+    /// Visits the stencil's nodes (wrapped into the periodic grid) with their weights; on a
+    /// slab, only the nodes of its planes (the other processes visit the rest).
     #[inline]
     pub fn visit(&self, grid: &Grid, mut f: impl FnMut(usize, f64)) {
         let wrap = |i: i64, n: usize| i.rem_euclid(n as i64) as usize;
         let kz = if grid.dim == 3 { 3 } else { 1 };
         for c in 0..kz {
             let (k, wz) = if grid.dim == 3 {
-                (wrap(self.first[2] + c as i64, grid.n[2]), self.w[2][c])
+                (wrap(self.first[2] + c as i64, grid.nz_whole), self.w[2][c])
             } else {
                 (0, 1.0)
             };
+            if k < grid.k0 || k >= grid.k0 + grid.n[2] {
+                continue;
+            }
+            let k = k - grid.k0;
             for b in 0..3 {
                 let j = wrap(self.first[1] + b as i64, grid.n[1]);
                 let wyz = self.w[1][b] * wz;
@@ -255,7 +260,8 @@ impl Stencil {
         }
     }
 
-    /// The value of a vector field (`dim` components) at the point.
+    /// The value of a vector field (`dim` components) at the point: on a slab, the part its
+    /// planes hold (summed over the processes, the value).
     #[inline]
     pub fn interpolate(&self, grid: &Grid, field: &[Vec<f64>]) -> DVec3 {
         let mut v = DVec3::ZERO;

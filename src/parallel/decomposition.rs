@@ -33,6 +33,42 @@ impl Decomposition {
     }
 }
 
+impl Decomposition {
+    /// Makes every process's `reason` (why the run must stop, set by the systems of this
+    /// process) the same: the lowest rank's that has one, labelled with its rank, or `None`
+    /// when none has. Every process calls it together (each step): a process that stopped
+    /// alone would leave the others waiting in the next exchange.
+    pub fn agree_failure(&self, reason: &mut Option<String>) {
+        let any = self.comm.max_one(if reason.is_some() { 1.0 } else { 0.0 });
+        if any == 0.0 {
+            return;
+        }
+        let (p, me) = (self.comm.size(), self.comm.rank());
+        // Every process's message length, then the bytes (exact in f64), in one sum each.
+        let mine = reason.as_deref().unwrap_or("").as_bytes();
+        let mut lens = vec![0.0; p];
+        lens[me] = mine.len() as f64;
+        self.comm.sum(&mut lens);
+        let Some(first) = lens.iter().position(|&l| l > 0.0) else {
+            return;
+        };
+        let mut bytes = vec![0.0; lens[first] as usize];
+        if me == first {
+            for (b, &c) in bytes.iter_mut().zip(mine) {
+                *b = c as f64;
+            }
+        }
+        self.comm.sum(&mut bytes);
+        let text: Vec<u8> = bytes.iter().map(|&b| b as u8).collect();
+        let text = String::from_utf8_lossy(&text);
+        *reason = Some(if p > 1 {
+            format!("(process {first} of {p}) {text}")
+        } else {
+            text.into_owned()
+        });
+    }
+}
+
 /// The sum over the processes of `x` when split (`x` itself on one).
 pub fn global_sum(d: Option<&Decomposition>, x: f64) -> f64 {
     d.map_or(x, |d| d.comm.sum_one(x))

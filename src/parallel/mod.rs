@@ -22,10 +22,12 @@
 
 pub mod comm;
 pub mod decomposition;
+pub mod halo;
 pub mod slabs;
 pub mod transpose;
 
 pub use comm::{Comm, Plain};
 pub use decomposition::{Decomposition, global_max, global_sum};
+pub use halo::Halo;
 pub use slabs::{DecompositionError, Slabs, split};
 pub use transpose::Transpose;

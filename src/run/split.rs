@@ -11,8 +11,11 @@
 //! checkpoint, an interruption) is taken together. A restart (`mpirun -np N tumble run
 //! --restart DIR`) needs the same number of processes and continues bit for bit.
 //!
-//! Not yet on several processes: HDF5 output, bodies and free surfaces (refused before anything
-//! is written, with the reason).
+//! The bodies are held whole by every process (their sums over the grid are added over the
+//! processes), so rank 0 writes `bodies.csv` and `contacts.csv` from its own copy.
+//!
+//! Not yet on several processes: HDF5 output and free surfaces (refused before anything is
+//! written, with the reason).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -21,7 +24,8 @@ use std::time::Instant;
 use anyhow::Context;
 
 use super::{
-    Progress, RunOptions, RunSummary, SeriesCsv, add_timings, apply_overrides, next_multiple, plot,
+    BodiesCsv, ContactsCsv, Progress, RunOptions, RunSummary, SeriesCsv, add_timings,
+    apply_overrides, next_multiple, plot,
 };
 use crate::io::checkpoint::{self, Checkpoint, RunProgress};
 use crate::io::output::{PvdSeries, atomic_write};
@@ -44,6 +48,9 @@ struct Outputs {
     dir: PathBuf,
     /// `series.csv` (rank 0).
     series: Option<SeriesCsv>,
+    /// `bodies.csv` and `contacts.csv` (rank 0, a scene with bodies).
+    bodies: Option<BodiesCsv>,
+    contacts: Option<ContactsCsv>,
     /// `fields.pvd` (rank 0, VTK output with fields).
     pvd: Option<PvdSeries>,
     /// Whether snapshots have fields to write.
@@ -107,6 +114,16 @@ pub fn run_split(
         } else {
             None
         },
+        bodies: if root {
+            BodiesCsv::create(&dir.join("bodies.csv"), &sim)?
+        } else {
+            None
+        },
+        contacts: if root {
+            ContactsCsv::create(&dir.join("contacts.csv"), &sim)?
+        } else {
+            None
+        },
         pvd: (root && vtk(&sim)).then(|| PvdSeries::new(dir.join("fields.pvd"))),
         vtk: vtk(&sim),
         count: 0,
@@ -158,7 +175,8 @@ pub fn restart_split(
     let root = comm.is_root();
     let mut log = None;
     // Rank 0's files cut back to the checkpoint; every process drops its later checkpoints.
-    let cut: anyhow::Result<Option<SeriesCsv>> = (|| {
+    type Csvs = (SeriesCsv, Option<BodiesCsv>, Option<ContactsCsv>);
+    let cut: anyhow::Result<Option<Csvs>> = (|| {
         for (s, _) in checkpoint::list(&dir)?
             .into_iter()
             .filter(|(s, _)| *s > step)
@@ -188,16 +206,40 @@ pub fn restart_split(
             return Ok(None);
         }
         log = Some(RunLog::append(&dir.join("log.txt"))?);
-        std::fs::OpenOptions::new()
-            .write(true)
-            .open(dir.join("series.csv"))
-            .and_then(|f| f.set_len(p.series_len))
-            .context("cannot cut series.csv back to the checkpoint")?;
-        Ok(Some(SeriesCsv::append(&dir.join("series.csv"), &sim)?))
+        let csvs = [
+            ("series.csv", Some(p.series_len)),
+            ("bodies.csv", p.bodies_len),
+            ("contacts.csv", p.contacts_len),
+        ];
+        for (name, len) in csvs {
+            let Some(len) = len else { continue };
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open(dir.join(name))
+                .and_then(|f| f.set_len(len))
+                .with_context(|| format!("cannot cut {name} back to the checkpoint"))?;
+        }
+        let bodies = match p.bodies_len {
+            Some(_) => Some(BodiesCsv::append(&dir.join("bodies.csv"))?),
+            None => None,
+        };
+        let contacts = match p.contacts_len {
+            Some(_) => Some(ContactsCsv::append(&dir.join("contacts.csv"))?),
+            None => None,
+        };
+        Ok(Some((
+            SeriesCsv::append(&dir.join("series.csv"), &sim)?,
+            bodies,
+            contacts,
+        )))
     })();
     // Every process has listed the later checkpoints before any is removed.
     comm.barrier();
-    let series = agree(&comm, cut, "cut the run's files back to the checkpoint")?;
+    let csvs = agree(&comm, cut, "cut the run's files back to the checkpoint")?;
+    let (series, bodies, contacts) = match csvs {
+        Some((s, b, c)) => (Some(s), b, c),
+        None => (None, None, None),
+    };
     if root {
         log_start(&sim, &comm, &dir, &format!("restart from step {step}"));
         atomic_write(&dir.join("scene.ron"), scene.to_ron().as_bytes())
@@ -205,6 +247,8 @@ pub fn restart_split(
     }
     let out = Outputs {
         series,
+        bodies,
+        contacts,
         pvd: (root && vtk(&sim))
             .then(|| PvdSeries::with_entries(dir.join("fields.pvd"), p.pvd.clone())),
         vtk: vtk(&sim),
@@ -330,6 +374,20 @@ impl Outputs {
             }
             None => 0,
         };
+        let bodies_len = match self.bodies.as_mut() {
+            Some(b) => {
+                b.flush()?;
+                Some(super::synced_len(&self.dir, "bodies.csv")?)
+            }
+            None => None,
+        };
+        let contacts_len = match self.contacts.as_mut() {
+            Some(c) => {
+                c.flush()?;
+                Some(super::synced_len(&self.dir, "contacts.csv")?)
+            }
+            None => None,
+        };
         let progress = RunProgress {
             next_out: self.next_out,
             snapshots: self.count as u64,
@@ -339,8 +397,8 @@ impl Outputs {
                 .map(|p| p.entries().to_vec())
                 .unwrap_or_default(),
             series_len,
-            bodies_len: None,
-            contacts_len: None,
+            bodies_len,
+            contacts_len,
         };
         let (rank, ranks, step) = (comm.rank(), comm.size(), sim.steps());
         let path = self
@@ -393,6 +451,9 @@ fn drive_split(
         if let Some(s) = out.series.as_mut() {
             s.row(&sim)?;
         }
+        if let Some(b) = out.bodies.as_mut() {
+            b.rows(&mut sim)?;
+        }
     }
     let end = sim.scene().numerics.end_time;
     let every = sim.scene().output.every;
@@ -424,6 +485,12 @@ fn drive_split(
             }
             if let Some(s) = out.series.as_mut() {
                 s.row(&sim)?;
+            }
+            if let Some(b) = out.bodies.as_mut() {
+                b.rows(&mut sim)?;
+            }
+            if let Some(c) = out.contacts.as_mut() {
+                c.rows(&sim)?;
             }
             add_timings(&mut totals, &sim.timings().last);
             if root {
@@ -475,6 +542,12 @@ fn drive_split(
     progress.bar.finish_and_clear();
     if let Some(s) = out.series.as_mut() {
         s.flush()?;
+    }
+    if let Some(b) = out.bodies.as_mut() {
+        b.flush()?;
+    }
+    if let Some(c) = out.contacts.as_mut() {
+        c.flush()?;
     }
     let summary = RunSummary {
         dir: out.dir.clone(),

@@ -66,18 +66,22 @@ impl SimulationBuilder {
 }
 
 /// The decomposition of `scene`'s grid over the processes of `comm`, or why it cannot run
-/// split (so far: a 3D flow without bodies or free surface).
+/// split (so far: a 3D flow, with or without bodies under the pressure coupling, without a
+/// free surface).
 pub fn split_scene(scene: &ValidScene, comm: Arc<Comm>) -> anyhow::Result<Decomposition> {
     let ranks = comm.size();
-    if !scene.bodies.is_empty() || scene.free_surface.is_some() {
+    if scene.free_surface.is_some() {
         anyhow::bail!(
-            "this scene has {}: on several processes tumble runs flows without bodies or free \
-             surface so far (run it on one process, without mpirun, or with -np 1)",
-            if scene.bodies.is_empty() {
-                "a free surface"
-            } else {
-                "bodies"
-            }
+            "this scene has a free surface: on several processes tumble runs flows without one \
+             so far (run it on one process, without mpirun, or with -np 1)"
+        );
+    }
+    let coupling = scene.resolved().params.numerics.body_coupling;
+    if !scene.bodies.is_empty() && coupling != crate::base::params::BodyCoupling::Pressure {
+        anyhow::bail!(
+            "this scene couples its bodies by `{coupling:?}`: on several processes tumble runs \
+             bodies under the default `Pressure` coupling only (run it on one process, without \
+             mpirun, or with -np 1)"
         );
     }
     Decomposition::new(&scene.grid(), comm)

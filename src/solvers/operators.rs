@@ -10,7 +10,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 use crate::base::grid::Grid;
-use crate::parallel::{Comm, Decomposition, DecompositionError};
+use crate::parallel::{Comm, Decomposition, DecompositionError, Halo};
 use crate::solvers::fft::{C64, FftEngine, wavenumber};
 use rayon::prelude::*;
 
@@ -716,11 +716,29 @@ fn velocity_hat(
     });
 }
 
+/// The halo [`curl_add`] reads on a slab (one plane a side of three components), shared by the
+/// systems that add a curl; empty on one process.
+#[derive(bevy_ecs::prelude::Resource, Debug, Clone, Default)]
+pub struct CurlHalo(pub Option<Halo>);
+
+impl CurlHalo {
+    /// The halo of `grid`'s slab when split.
+    pub fn of_grid(grid: &Grid, split: Option<&Decomposition>) -> Self {
+        CurlHalo(split.map(|d| Halo::new(grid, d, 1, 3)))
+    }
+
+    /// The halo, if split.
+    pub fn get(&mut self) -> Option<&mut Halo> {
+        self.0.as_mut()
+    }
+}
+
 /// ω += ∇×a by centred differences (periodic): the vorticity of a velocity increment `a`
 /// (the penalization's, `systems/penalization.rs`, or the pressure projection's,
-/// `systems/pressure.rs`).
-pub fn curl_add(grid: &Grid, a: &[Vec<f64>], omega: &mut [Vec<f64>]) {
-    let [nx, ny, nz] = grid.n;
+/// `systems/pressure.rs`). On a slab, `halo` (one plane a side, three components) is filled with
+/// the neighbours' planes of `a` first.
+pub fn curl_add(grid: &Grid, a: &[Vec<f64>], omega: &mut [Vec<f64>], halo: Option<&mut Halo>) {
+    let [nx, ny, _] = grid.n;
     let inv2h = 0.5 / grid.h;
     let plane = nx * ny;
     let nb = crate::base::grid::periodic_neighbours;
@@ -739,6 +757,10 @@ pub fn curl_add(grid: &Grid, a: &[Vec<f64>], omega: &mut [Vec<f64>]) {
             });
         return;
     }
+    let halo = halo.map(|h| {
+        h.fill(a);
+        &*h
+    });
     let (o0, rest) = omega.split_at_mut(1);
     let (o1, o2) = rest.split_at_mut(1);
     o0[0]
@@ -747,21 +769,22 @@ pub fn curl_add(grid: &Grid, a: &[Vec<f64>], omega: &mut [Vec<f64>]) {
         .zip(o2[0].par_chunks_mut(plane))
         .enumerate()
         .for_each(|(k, ((w0, w1), w2))| {
-            let (km, kp) = nb(k, nz);
+            let k = k as isize;
+            let at = |c: usize, k: isize| crate::parallel::halo::plane(grid, &a[c], halo, c, k);
+            let [a0, a1, a2] = [0, 1, 2].map(|c| at(c, k));
+            let below = [0, 1, 2].map(|c| at(c, k - 1));
+            let above = [0, 1, 2].map(|c| at(c, k + 1));
             for j in 0..ny {
                 let (jm, jp) = nb(j, ny);
                 for i in 0..nx {
                     let (im, ip) = nb(i, nx);
-                    let id = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
-                    let d = |f: &[f64], axis: usize| match axis {
-                        0 => (f[id(ip, j, k)] - f[id(im, j, k)]) * inv2h,
-                        1 => (f[id(i, jp, k)] - f[id(i, jm, k)]) * inv2h,
-                        _ => (f[id(i, j, kp)] - f[id(i, j, km)]) * inv2h,
-                    };
                     let l = i + nx * j;
-                    w0[l] += d(&a[2], 1) - d(&a[1], 2);
-                    w1[l] += d(&a[0], 2) - d(&a[2], 0);
-                    w2[l] += d(&a[1], 0) - d(&a[0], 1);
+                    let dx = |f: &[f64]| (f[ip + nx * j] - f[im + nx * j]) * inv2h;
+                    let dy = |f: &[f64]| (f[i + nx * jp] - f[i + nx * jm]) * inv2h;
+                    let dz = |c: usize| (above[c][l] - below[c][l]) * inv2h;
+                    w0[l] += dy(a2) - dz(1);
+                    w1[l] += dz(0) - dx(a2);
+                    w2[l] += dx(a1) - dy(a0);
                 }
             }
         });

@@ -4,11 +4,20 @@
 //! exact when β is uniform) or by one multigrid V-cycle ([`crate::solvers::multigrid`]),
 //! started from the φ it is given. Dot products are summed row by row in a fixed order, so the
 //! result does not depend on the thread count.
+//!
+//! On several processes each holds its slab of every vector: the operator reads one ghost plane
+//! of the iterate and of β a side ([`Halo`]), the dot products are added over the processes in
+//! rank order and the FFT preconditioner is the split one. The multigrid hierarchy is not built
+//! there (its coarse levels would need gathering): the FFT preconditioner then serves every
+//! contrast, in more iterations (45 instead of 7 at 1:1000, see [`MULTIGRID_CONTRAST`]).
 
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
+use crate::parallel::halo::z_line;
+use crate::parallel::{Comm, Decomposition, Halo};
 use crate::solvers::Spectral;
 use crate::solvers::multigrid::Multigrid;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Iteration cap of the solve.
 pub const MAX_ITERATIONS: usize = 2000;
@@ -66,6 +75,9 @@ pub struct VariablePoisson {
     pub iterations: usize,
     /// Relative residual reached by the last solve.
     pub residual: f64,
+    /// On several processes: their communicator, and the ghost planes of the iterate (0) and
+    /// of β along z (1).
+    split: Option<(Arc<Comm>, Halo)>,
 }
 
 impl VariablePoisson {
@@ -73,8 +85,9 @@ impl VariablePoisson {
     /// [`VariablePoisson::choose`] then picks where β varies by [`MULTIGRID_CONTRAST`] or
     /// more), unless the grid's node counts do not coarsen far enough
     /// ([`crate::solvers::multigrid::coarsens_fully`]).
-    pub fn new(grid: &Grid, multigrid: bool) -> Self {
+    pub fn new(grid: &Grid, multigrid: bool, split: Option<&Decomposition>) -> Self {
         let n = grid.len();
+        let multigrid = multigrid && split.is_none();
         VariablePoisson {
             beta: vec![vec![0.0; n]; grid.dim],
             rhs: vec![0.0; n],
@@ -87,7 +100,39 @@ impl VariablePoisson {
             preconditioner: Preconditioner::Spectral,
             iterations: 0,
             residual: 0.0,
+            split: split.map(|d| (d.comm.clone(), Halo::new(grid, d, 1, 2))),
         }
+    }
+
+    /// On a slab, fills the ghost planes of β along z from the neighbours (after `beta` is
+    /// set, before [`VariablePoisson::beta_halo`] is read or the solve); nothing on one
+    /// process.
+    pub fn fill_beta_halo(&mut self, grid: &Grid) {
+        if let Some((_, h)) = &mut self.split
+            && grid.dim == 3
+        {
+            h.fill_one(1, &self.beta[2]);
+        }
+    }
+
+    /// The halo whose component 1 holds β along z's ghost planes (filled by
+    /// [`VariablePoisson::fill_beta_halo`]), on a slab.
+    pub fn beta_halo(&self) -> Option<&Halo> {
+        self.split.as_ref().map(|(_, h)| h)
+    }
+
+    /// The right-hand side to set, with β and its halo (see [`VariablePoisson::beta_halo`]).
+    pub fn rhs_beta(&mut self) -> (&mut [f64], &[Vec<f64>], Option<&Halo>) {
+        (
+            &mut self.rhs,
+            &self.beta,
+            self.split.as_ref().map(|(_, h)| h),
+        )
+    }
+
+    /// The sum over the processes of `x` (`x` on one).
+    pub fn global(&self, x: f64) -> f64 {
+        self.split.as_ref().map_or(x, |(c, _)| c.sum_one(x))
     }
 
     /// Solves -h²∇·(β∇φ) = `rhs` to a relative residual `tolerance` from the φ given, with
@@ -145,24 +190,36 @@ impl VariablePoisson {
         self.multigrid.is_some()
     }
 
-    /// Mean of a field (rows in order, thread-count independent).
+    /// Mean of a field over the whole grid (rows in order, thread-count independent).
     pub fn mean(&mut self, nx: usize, a: &[f64]) -> f64 {
-        mean(&mut self.partial, nx, a)
+        let comm = self.split.as_ref().map(|(c, _)| &**c);
+        mean(&mut self.partial, nx, a, comm)
     }
 }
 
 /// `out = A x` with A = -∇·(β∇) (compact stencil, periodic), times h², and x·Ax in the same
 /// pass (per row into `partial`, then the rows in order: the same sum as [`dot`]). Row by row,
-/// with the neighbour rows as slices and the interior of a row in one branch-free loop.
+/// with the neighbour rows as slices and the interior of a row in one branch-free loop. On a
+/// slab the rows beyond it come from `halo` (component 0: `x`, filled here; 1: β along z).
 fn apply<'a>(
     grid: &Grid,
     beta: &'a [Vec<f64>],
     x: &'a [f64],
     out: &mut [f64],
     partial: &mut [f64],
+    split: Option<&'a mut (Arc<Comm>, Halo)>,
 ) -> f64 {
     let nx = grid.n[0];
     let three = grid.dim == 3;
+    let (comm, halo) = match split {
+        Some((c, h)) => {
+            if three {
+                h.fill_one(0, x);
+            }
+            (Some(&**c), Some(&*h))
+        }
+        None => (None, None),
+    };
     out.par_chunks_mut(nx)
         .zip(partial.par_iter_mut())
         .enumerate()
@@ -174,10 +231,10 @@ fn apply<'a>(
             let (by, bym) = (line(&beta[1], rn.c0), line(&beta[1], rn.below[0]));
             let (zm, zp, bz, bzm) = if three {
                 (
-                    line(x, rn.below[1]),
-                    line(x, rn.above[1]),
+                    z_line(grid, x, halo, 0, row, -1),
+                    z_line(grid, x, halo, 0, row, 1),
                     line(&beta[2], rn.c0),
-                    line(&beta[2], rn.below[1]),
+                    z_line(grid, &beta[2], halo, 1, row, -1),
                 )
             } else {
                 (xc, xc, bx, bx)
@@ -195,25 +252,32 @@ fn apply<'a>(
             for_row(nx, |i, im, ip| o[i] = node(i, im, ip));
             *xax = xc.iter().zip(o.iter()).map(|(x, y)| x * y).sum();
         });
-    partial.iter().sum()
+    total(partial, comm)
 }
 
-/// Σ a_i b_i, summed per row and then over rows in order.
-fn dot(partial: &mut [f64], nx: usize, a: &[f64], b: &[f64]) -> f64 {
+/// The rows' partial sums added in order, then over the processes (in rank order) when split.
+fn total(partial: &[f64], comm: Option<&Comm>) -> f64 {
+    let s = partial.iter().sum::<f64>();
+    comm.map_or(s, |c| c.sum_one(s))
+}
+
+/// Σ a_i b_i, summed per row and then over rows in order (and processes).
+fn dot(partial: &mut [f64], nx: usize, a: &[f64], b: &[f64], comm: Option<&Comm>) -> f64 {
     partial.par_iter_mut().enumerate().for_each(|(row, s)| {
         let r = row * nx..(row + 1) * nx;
         *s = a[r.clone()].iter().zip(&b[r]).map(|(x, y)| x * y).sum();
     });
-    partial.iter().sum()
+    total(partial, comm)
 }
 
-/// Mean of a field (rows in order).
-fn mean(partial: &mut [f64], nx: usize, a: &[f64]) -> f64 {
+/// Mean of a field over the whole grid (rows in order, then processes).
+fn mean(partial: &mut [f64], nx: usize, a: &[f64], comm: Option<&Comm>) -> f64 {
     partial
         .par_iter_mut()
         .enumerate()
         .for_each(|(row, s)| *s = a[row * nx..(row + 1) * nx].iter().sum());
-    partial.iter().sum::<f64>() / a.len() as f64
+    let n = comm.map_or(a.len() as f64, |c| c.sum_one(a.len() as f64));
+    total(partial, comm) / n
 }
 
 /// Solves A φ = b (A = -h²∇·(β∇)) by preconditioned conjugate gradients from the φ it holds.
@@ -235,24 +299,27 @@ fn solve(
         ap,
         partial,
         multigrid,
+        split,
         ..
     } = s;
+    let comm = split.as_ref().map(|(c, _)| c.clone());
+    let comm = comm.as_deref();
     if let (Preconditioner::Multigrid, Some(mg)) = (with, multigrid.as_mut()) {
         mg.set_coefficients(beta);
     }
     // r holds b on entry; remove its mean (zero up to round-off: it is a divergence).
-    let mb = mean(partial, nx, r);
+    let mb = mean(partial, nx, r, comm);
     r.par_iter_mut().for_each(|v| *v -= mb);
-    let bnorm = dot(partial, nx, r, r).sqrt();
+    let bnorm = dot(partial, nx, r, r, comm).sqrt();
     if bnorm == 0.0 {
         phi.par_iter_mut().for_each(|v| *v = 0.0);
         return (0, 0.0);
     }
-    apply(grid, beta, phi, ap, partial);
+    apply(grid, beta, phi, ap, partial, split.as_mut());
     r.par_iter_mut()
         .zip(ap.par_iter())
         .for_each(|(r, a)| *r -= a);
-    let mut rnorm = dot(partial, nx, r, r).sqrt();
+    let mut rnorm = dot(partial, nx, r, r, comm).sqrt();
     if rnorm <= tolerance * bnorm {
         return (0, rnorm / bnorm);
     }
@@ -285,14 +352,14 @@ fn solve(
                     }
                     *s = r.iter().zip(z.iter()).map(|(x, y)| x * y).sum();
                 });
-            partial.iter().sum::<f64>()
+            total(partial, comm)
         };
     let mut rz = precondition(spectral, partial, r, z);
     p.copy_from_slice(z);
     let mut it = 0;
     while it < MAX_ITERATIONS {
         it += 1;
-        let pap = apply(grid, beta, p, ap, partial);
+        let pap = apply(grid, beta, p, ap, partial, split.as_mut());
         if pap <= 0.0 {
             break;
         }
@@ -310,7 +377,7 @@ fn solve(
                 }
                 *s = r.iter().map(|v| v * v).sum();
             });
-        rnorm = partial.iter().sum::<f64>().sqrt();
+        rnorm = total(partial, comm).sqrt();
         if rnorm <= tolerance * bnorm {
             break;
         }

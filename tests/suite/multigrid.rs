@@ -90,7 +90,7 @@ fn minus_mean(x: &mut [f64]) {
 /// Solves A φ = A φ_exact from φ = 0 with `with`; returns (iterations, max |φ - φ_exact| /
 /// max |φ_exact|, both mean-free).
 fn solve(grid: &Grid, rho: &[f64], with: Preconditioner, tol: f64) -> (usize, f64) {
-    let mut vp = VariablePoisson::new(grid, true);
+    let mut vp = VariablePoisson::new(grid, true, None);
     vp.beta = faces(grid, rho);
     let mut exact = Rng(7).field(grid.len());
     minus_mean(&mut exact);
@@ -214,7 +214,7 @@ fn multigrid_levels() {
     // A prime node count coarsens too, so a solver asked for a hierarchy keeps one.
     let prime = Grid::new([31, 31, 31], 1.0 / 31.0, [0.0; 3]);
     assert!(coarsens_fully(&prime));
-    let mut vp = VariablePoisson::new(&prime, true);
+    let mut vp = VariablePoisson::new(&prime, true, None);
     assert!(vp.has_multigrid());
     vp.beta = faces(&prime, &density(&prime, 1000.0));
     assert_eq!(vp.choose(), Preconditioner::Multigrid);
@@ -251,7 +251,7 @@ fn multigrid_is_thread_count_independent() {
     let grid = Grid::new([24, 18, 30], 1.0 / 24.0, [0.0; 3]);
     let rho = density(&grid, 300.0);
     let run = || {
-        let mut vp = VariablePoisson::new(&grid, true);
+        let mut vp = VariablePoisson::new(&grid, true, None);
         vp.beta = faces(&grid, &rho);
         let mut b = Rng(3).field(grid.len());
         minus_mean(&mut b);
@@ -287,7 +287,7 @@ fn preconditioner_choice_follows_the_contrast() {
         (100.0, true, Preconditioner::Multigrid),
         (100.0, false, Preconditioner::Spectral),
     ] {
-        let mut vp = VariablePoisson::new(&grid, hierarchy);
+        let mut vp = VariablePoisson::new(&grid, hierarchy, None);
         vp.beta = faces(&grid, &density(&grid, contrast));
         assert_eq!(
             vp.choose(),
