@@ -22,7 +22,7 @@ use crate::base::fields::{Failure, Fields, Params, Sample, SimTime};
 use crate::base::grid::Grid;
 use crate::base::params::TimeStep;
 use crate::bodies::{Body, BodyShape, Material, RigidState};
-use crate::parallel::Decomposition;
+use crate::parallel::{Decomposition, PlaneSums};
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
@@ -37,6 +37,9 @@ pub struct Diagnostics {
     /// Fallback step when nothing else bounds dt (fluid at rest, no dt_max).
     pub dt_fallback: f64,
     rows: Vec<RowStats>,
+    /// The sums of each z-plane (energy, enstrophy, circulation), added in plane order: the
+    /// same on any number of processes ([`PlaneSums`]).
+    planes: PlaneSums,
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -99,6 +102,7 @@ impl Diagnostics {
             omega0: 0.0,
             dt_fallback,
             rows: vec![RowStats::default(); grid.n[1] * grid.n[2]],
+            planes: PlaneSums::new(grid.nz_whole, 5),
         }
     }
 
@@ -144,12 +148,23 @@ impl Diagnostics {
             *st = s;
         });
         let mut tot = RowStats::default();
-        for s in &self.rows {
-            tot.u2 += s.u2;
-            tot.w2 += s.w2;
-            for c in 0..3 {
-                tot.wsum[c] += s.wsum[c];
+        self.planes.clear(grid.nz_whole);
+        for (k, rows) in self.rows.chunks(grid.n[1]).enumerate() {
+            let mut p = [0.0; 5];
+            for s in rows {
+                p[0] += s.u2;
+                p[1] += s.w2;
+                for c in 0..3 {
+                    p[2 + c] += s.wsum[c];
+                }
             }
+            self.planes.plane_mut(grid.k0 + k).copy_from_slice(&p);
+        }
+        let mut sums = [0.0; 5];
+        self.planes
+            .total(split.map(|d| &*d.comm), grid.nz_whole, &mut sums);
+        [tot.u2, tot.w2, tot.wsum[0], tot.wsum[1], tot.wsum[2]] = sums;
+        for s in &self.rows {
             if s.wmax2 > tot.wmax2 {
                 tot.wmax2 = s.wmax2;
                 tot.wmax_at = s.wmax_at;
@@ -164,13 +179,9 @@ impl Diagnostics {
         }
         if let Some(d) = split {
             let nan = f64::from(u8::from(tot.nan_at.is_some()));
-            let mut sums = [tot.u2, tot.w2, tot.wsum[0], tot.wsum[1], tot.wsum[2], nan];
-            d.comm.sum(&mut sums);
-            let mut maxima = [tot.wmax2, tot.umax2];
+            let mut maxima = [tot.wmax2, tot.umax2, nan];
             d.comm.max(&mut maxima);
-            [tot.u2, tot.w2, tot.wsum[0], tot.wsum[1], tot.wsum[2]] =
-                [sums[0], sums[1], sums[2], sums[3], sums[4]];
-            if sums[5] > 0.0 && tot.nan_at.is_none() {
+            if maxima[2] > 0.0 && tot.nan_at.is_none() {
                 tot.nan_at = Some(ELSEWHERE);
             }
             if tot.wmax2 < maxima[0] {

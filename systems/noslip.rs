@@ -204,23 +204,40 @@ impl NoSlip {
         self.nodes.reserve(total.saturating_sub(self.nodes.len()));
         if self.split.is_some() {
             self.flat
-                .reserve((3 * total).saturating_sub(self.flat.len()));
+                .reserve((9 * total).saturating_sub(self.flat.len()));
         }
         self.bodies.reserve(self.last.len());
     }
 }
 
-/// On several processes, `v` (values at the markers, each the part of one slab) summed over
-/// them, in rank order, through the flat buffer `flat`; nothing on one.
-fn sum_markers(split: Option<&Comm>, flat: &mut Vec<f64>, v: &mut [DVec3]) {
+/// Interpolates `field` at every marker of `nodes` into `out`: the kernel's plane sums
+/// (`Stencil::interpolate_planes`, through the flat buffer `flat`), added over the processes
+/// when split (each plane's are one process's: exact) and then in plane order, so every
+/// process gets the values one process would, bit for bit.
+fn interpolate_all(
+    grid: &Grid,
+    nodes: &[(Stencil, DVec3)],
+    field: &[Vec<f64>],
+    split: Option<&Comm>,
+    flat: &mut Vec<f64>,
+    out: &mut [DVec3],
+) {
     let Some(c) = split else {
+        for ((st, _), o) in nodes.iter().zip(out.iter_mut()) {
+            *o = st.interpolate(grid, field);
+        }
         return;
     };
     flat.clear();
-    flat.extend(v.iter().flat_map(|x| x.to_array()));
+    for (st, _) in nodes {
+        for p in st.interpolate_planes(grid, field) {
+            flat.extend_from_slice(&p.to_array());
+        }
+    }
     c.sum(flat);
-    for (x, f) in v.iter_mut().zip(flat.chunks_exact(3)) {
-        *x = DVec3::new(f[0], f[1], f[2]);
+    for (o, f) in out.iter_mut().zip(flat.chunks_exact(9)) {
+        let p = |k: usize| DVec3::new(f[3 * k], f[3 * k + 1], f[3 * k + 2]);
+        *o = p(0) + p(1) + p(2);
     }
 }
 
@@ -302,9 +319,9 @@ pub fn noslip(
             let rv = pos - state.centroid;
             let ubar = state.velocity + state.angular_velocity.cross(rv);
             let st = Stencil::at(&grid, pos);
-            // u at the marker (on a slab its part, summed below); ū kept in x meanwhile.
+            // u at the marker interpolated below; ū kept in x meanwhile.
             ns.nodes.push((st, rv));
-            ns.r.push(st.interpolate(&grid, &fields.u));
+            ns.r.push(DVec3::ZERO);
             ns.x.push(ubar);
         }
         // E + M_v (`VirtualMass`): positive for every body.
@@ -327,7 +344,15 @@ pub fn noslip(
         return;
     }
     // The slip ū - u at the markers; x starts from zero.
-    sum_markers(ns.split.as_deref(), &mut ns.flat, &mut ns.r);
+    let split = ns.split.clone();
+    interpolate_all(
+        &grid,
+        &ns.nodes,
+        &fields.u,
+        split.as_deref(),
+        &mut ns.flat,
+        &mut ns.r,
+    );
     for (r, x) in ns.r.iter_mut().zip(ns.x.iter_mut()) {
         *r = *x - *r;
         *x = DVec3::ZERO;
@@ -523,10 +548,14 @@ fn apply(ns: &mut NoSlip, grid: &Grid, spectral: &mut Spectral, nu_dt: f64, dv: 
         });
     }
     spectral.forcing_velocity(&ns.p_grid, nu_dt, &mut ns.kp_grid);
-    for ((st, _), ap) in ns.nodes.iter().zip(ns.ap.iter_mut()) {
-        *ap = st.interpolate(grid, &ns.kp_grid);
-    }
-    sum_markers(ns.split.as_deref(), &mut ns.flat, &mut ns.ap);
+    interpolate_all(
+        grid,
+        &ns.nodes,
+        &ns.kp_grid,
+        ns.split.as_deref(),
+        &mut ns.flat,
+        &mut ns.ap,
+    );
     for rec in ns.bodies.iter_mut() {
         let (lo, hi) = rec.range;
         let (mut pf, mut pl) = (DVec3::ZERO, DVec3::ZERO);

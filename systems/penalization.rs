@@ -163,15 +163,12 @@ pub fn penalization(
                     }
                     acc[..3].copy_from_slice(&f.to_array());
                     acc[3..6].copy_from_slice(&m.to_array());
+                    acc[6..].fill(0.0);
                 });
             if own_force {
-                let mut t = [0.0; 6];
-                for s in &sums.rows_mut()[..rows] {
-                    for (t, v) in t.iter_mut().zip(s) {
-                        *t += v;
-                    }
-                }
-                sums.global(&mut t);
+                let mut t = [[0.0; 16]];
+                sums.patch_total(patch, &mut t);
+                let t = t[0];
                 *hydro = Hydro {
                     force: DVec3::new(t[0], t[1], t[2]),
                     torque: DVec3::new(t[3], t[4], t[5]),

@@ -2,13 +2,14 @@
 //! inertia of a weight χ (the rigid velocity of paper eq. 7, the mass properties of a body in
 //! vacuum, the excess momentum of the pressure projection), several weights in one pass, with
 //! the per-row partial sums preallocated in [`BodySums`]. Sums are taken per patch row and added
-//! in row order, so they do not depend on the number of threads. On several processes each
-//! sums the rows of its slab and the processes' sums are added in rank order
-//! ([`crate::parallel::Comm::sum`]): every process gets the same moments, bit for bit.
+//! in order, per z-plane of the patch first and then plane after plane
+//! ([`crate::parallel::PlaneSums`]), so they depend neither on the number of threads nor on the
+//! number of processes: split, each process sums the rows of its slab's planes and every
+//! process gets the same moments, those of one process, bit for bit.
 
 use crate::base::grid::Grid;
 use crate::bodies::{Body, GridPatch, RigidState, kinematic_velocity};
-use crate::parallel::{Comm, Decomposition};
+use crate::parallel::{Comm, Decomposition, PlaneSums};
 use bevy_ecs::prelude::*;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -19,6 +20,7 @@ use std::sync::Arc;
 #[derive(Resource, Debug, Clone)]
 pub struct BodySums {
     rows: Vec<[f64; 16]>,
+    planes: PlaneSums,
     comm: Option<Arc<Comm>>,
 }
 
@@ -33,15 +35,40 @@ impl BodySums {
     pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
         BodySums {
             rows: vec![[0.0; 16]; MAX_WEIGHTS * grid.n[1] * grid.n[2]],
+            planes: PlaneSums::new(grid.nz_whole, MAX_WEIGHTS * 16),
             comm: split.map(|d| d.comm.clone()),
         }
     }
 
-    /// Adds `v` over the processes (in rank order, the same bits on each) when split; every
+    /// The sum over `patch` (the whole body's, on every process) of the rows' values in the
+    /// row buffer, `per` entries a patch row of this process (`out.len()` of them): the rows of
+    /// each plane in order, then the planes of the whole box in order ([`PlaneSums`]). Every
     /// process must call it, for the same bodies in the same order.
-    pub fn global(&self, v: &mut [f64]) {
-        if let Some(c) = &self.comm {
-            c.sum(v);
+    pub fn patch_total(&mut self, patch: &GridPatch, out: &mut [[f64; 16]]) {
+        let per = out.len();
+        let (dy, dz) = (patch.dims[1], patch.dims[2]);
+        let whole_dz = patch.whole.1[2];
+        // The box's plane of this process's patch plane 0.
+        let c0 = (patch.lo[2] - patch.whole.0[2]) as usize;
+        self.planes.clear(whole_dz);
+        if !patch.is_empty() {
+            for c in 0..dz {
+                let p = self.planes.plane_mut(c0 + c);
+                for b in 0..dy {
+                    let r = b + dy * c;
+                    for (q, row) in self.rows[r * per..(r + 1) * per].iter().enumerate() {
+                        for (t, v) in p[q * 16..(q + 1) * 16].iter_mut().zip(row) {
+                            *t += v;
+                        }
+                    }
+                }
+            }
+        }
+        let mut flat = [0.0; MAX_WEIGHTS * 16];
+        self.planes
+            .total(self.comm.as_deref(), whole_dz, &mut flat[..per * 16]);
+        for (q, o) in out.iter_mut().enumerate() {
+            o.copy_from_slice(&flat[q * 16..(q + 1) * 16]);
         }
     }
 }
@@ -173,14 +200,7 @@ pub fn integrate_n<const N: usize>(
             acc.copy_from_slice(&s);
         });
     let mut t = [ZERO; N];
-    for s in sums.rows[..N * rows].chunks(N) {
-        for (t, s) in t.iter_mut().zip(s) {
-            for (t, v) in t.iter_mut().zip(s) {
-                *t += v;
-            }
-        }
-    }
-    sums.global(t.as_flattened_mut());
+    sums.patch_total(patch, &mut t);
     std::array::from_fn(|q| moments(center, dv, t[q]).unwrap_or(empty))
 }
 

@@ -260,16 +260,38 @@ impl Stencil {
         }
     }
 
-    /// The value of a vector field (`dim` components) at the point: on a slab, the part its
-    /// planes hold (summed over the processes, the value).
+    /// The value of a vector field (`dim` components) at the point, the kernel's planes along z
+    /// added in order ([`Stencil::interpolate_planes`]).
     #[inline]
     pub fn interpolate(&self, grid: &Grid, field: &[Vec<f64>]) -> DVec3 {
-        let mut v = DVec3::ZERO;
+        let [a, b, c] = self.interpolate_planes(grid, field);
+        a + b + c
+    }
+
+    /// The kernel's sum over each of its planes along z (one in 2D, the others zero); on a
+    /// slab, zero for the planes it does not hold. Added over the processes (each plane's is
+    /// one process's: exact) and then in order, it is [`Stencil::interpolate`] on one process,
+    /// bit for bit.
+    #[inline]
+    pub fn interpolate_planes(&self, grid: &Grid, field: &[Vec<f64>]) -> [DVec3; 3] {
+        let mut v = [DVec3::ZERO; 3];
+        let plane = grid.plane();
         self.visit(grid, |g, w| {
-            for (q, c) in field.iter().enumerate() {
-                v[q] += w * c[g];
+            let c = self.plane_of(grid, g / plane);
+            for (q, f) in field.iter().enumerate() {
+                v[c][q] += w * f[g];
             }
         });
         v
+    }
+
+    /// The kernel's plane (0..3) of the slab's plane `k`.
+    #[inline]
+    fn plane_of(&self, grid: &Grid, k: usize) -> usize {
+        if grid.dim == 2 {
+            return 0;
+        }
+        let kw = (k + grid.k0) as i64;
+        (kw - self.first[2]).rem_euclid(grid.nz_whole as i64) as usize
     }
 }

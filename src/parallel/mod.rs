@@ -23,11 +23,13 @@
 pub mod comm;
 pub mod decomposition;
 pub mod halo;
+pub mod planes;
 pub mod slabs;
 pub mod transpose;
 
 pub use comm::{Comm, Plain};
 pub use decomposition::{Decomposition, global_max, global_sum};
 pub use halo::Halo;
+pub use planes::{PlaneSums, RowSums};
 pub use slabs::{DecompositionError, Slabs, split};
 pub use transpose::Transpose;

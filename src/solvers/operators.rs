@@ -10,7 +10,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 use crate::base::grid::Grid;
-use crate::parallel::{Comm, Decomposition, DecompositionError, Halo};
+use crate::parallel::{Comm, Decomposition, DecompositionError, Halo, PlaneSums};
 use crate::solvers::fft::{C64, FftEngine, wavenumber};
 use rayon::prelude::*;
 
@@ -95,6 +95,9 @@ pub struct Spectral {
     /// Per row of the spectrum: the kinetic energy the last damped diffusion removed (summed
     /// in row order afterwards, so the total does not depend on the thread count).
     removed_rows: Vec<f64>,
+    /// Per y row of the whole spectrum, the removed energy of its modes (summed over z in
+    /// order), added in row order: the same on any number of processes ([`PlaneSums`]).
+    removed_by_y: PlaneSums,
     /// Spectrum of the last forcing response, one buffer per velocity component (empty until
     /// [`Spectral::reserve_forcing`]).
     force_hat: Vec<Vec<C64>>,
@@ -162,6 +165,7 @@ impl Spectral {
             cached: None,
             k_nyquist: std::f64::consts::PI / grid.h,
             removed_rows: vec![0.0; clen / nxh],
+            removed_by_y: PlaneSums::new(grid.n[1], 1),
             force_hat: Vec::new(),
             force_sum_hat: Vec::new(),
         }
@@ -513,15 +517,10 @@ impl Spectral {
             _ => unreachable!("omega_hat has 1 or 3 components"),
         }
         if damped {
-            self.global_sum(e_norm * self.removed_rows.iter().sum::<f64>())
+            e_norm * self.removed_total()
         } else {
             0.0
         }
-    }
-
-    /// The sum of `x` over the processes the solver is split over (`x` itself unless split).
-    fn global_sum(&self, x: f64) -> f64 {
-        self.fft.comm().map_or(x, |c| c.sum_one(x))
     }
 
     /// Diffusion and (3D) divergence cleaning of the vorticity, in place.
@@ -600,11 +599,28 @@ impl Spectral {
                     *out = sum;
                 });
             if damped {
-                removed += e_norm * self.removed_rows.iter().sum::<f64>();
+                removed += e_norm * self.removed_total();
             }
             self.fft.inverse(None, &mut self.work, c);
         }
-        self.global_sum(removed)
+        removed
+    }
+
+    /// The sum of `removed_rows` over the whole spectrum: per y row over z in order, then the
+    /// rows in order (every process holds whole y rows of the spectrum).
+    fn removed_total(&mut self) -> f64 {
+        let rows = self.fft.spectral_rows();
+        let nyl = rows.len();
+        let ny = self.removed_by_y.len();
+        self.removed_by_y.clear(ny);
+        for jl in 0..nyl {
+            let mut s = 0.0;
+            for v in self.removed_rows.iter().skip(jl).step_by(nyl) {
+                s += v;
+            }
+            self.removed_by_y.plane_mut(rows.start + jl)[0] = s;
+        }
+        self.removed_by_y.total_one(self.fft.comm(), ny)
     }
 
     /// Velocity from vorticity: `Lap psi = -omega`, `u = curl psi`, spectrally exact.

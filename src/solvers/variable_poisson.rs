@@ -13,11 +13,10 @@
 
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::parallel::halo::z_line;
-use crate::parallel::{Comm, Decomposition, Halo};
+use crate::parallel::{Decomposition, Halo, RowSums};
 use crate::solvers::Spectral;
 use crate::solvers::multigrid::Multigrid;
 use rayon::prelude::*;
-use std::sync::Arc;
 
 /// Iteration cap of the solve.
 pub const MAX_ITERATIONS: usize = 2000;
@@ -75,9 +74,10 @@ pub struct VariablePoisson {
     pub iterations: usize,
     /// Relative residual reached by the last solve.
     pub residual: f64,
-    /// On several processes: their communicator, and the ghost planes of the iterate (0) and
-    /// of β along z (1).
-    split: Option<(Arc<Comm>, Halo)>,
+    /// On several processes: the ghost planes of the iterate (0) and of β along z (1).
+    split: Option<Halo>,
+    /// The sums over the rows (the same on any number of processes).
+    sums: RowSums,
 }
 
 impl VariablePoisson {
@@ -100,7 +100,8 @@ impl VariablePoisson {
             preconditioner: Preconditioner::Spectral,
             iterations: 0,
             residual: 0.0,
-            split: split.map(|d| (d.comm.clone(), Halo::new(grid, d, 1, 2))),
+            split: split.map(|d| Halo::new(grid, d, 1, 2)),
+            sums: RowSums::new(grid, split),
         }
     }
 
@@ -108,7 +109,7 @@ impl VariablePoisson {
     /// set, before [`VariablePoisson::beta_halo`] is read or the solve); nothing on one
     /// process.
     pub fn fill_beta_halo(&mut self, grid: &Grid) {
-        if let Some((_, h)) = &mut self.split
+        if let Some(h) = &mut self.split
             && grid.dim == 3
         {
             h.fill_one(1, &self.beta[2]);
@@ -118,21 +119,12 @@ impl VariablePoisson {
     /// The halo whose component 1 holds β along z's ghost planes (filled by
     /// [`VariablePoisson::fill_beta_halo`]), on a slab.
     pub fn beta_halo(&self) -> Option<&Halo> {
-        self.split.as_ref().map(|(_, h)| h)
+        self.split.as_ref()
     }
 
     /// The right-hand side to set, with β and its halo (see [`VariablePoisson::beta_halo`]).
     pub fn rhs_beta(&mut self) -> (&mut [f64], &[Vec<f64>], Option<&Halo>) {
-        (
-            &mut self.rhs,
-            &self.beta,
-            self.split.as_ref().map(|(_, h)| h),
-        )
-    }
-
-    /// The sum over the processes of `x` (`x` on one).
-    pub fn global(&self, x: f64) -> f64 {
-        self.split.as_ref().map_or(x, |(c, _)| c.sum_one(x))
+        (&mut self.rhs, &self.beta, self.split.as_ref())
     }
 
     /// Solves -h²∇·(β∇φ) = `rhs` to a relative residual `tolerance` from the φ given, with
@@ -192,8 +184,7 @@ impl VariablePoisson {
 
     /// Mean of a field over the whole grid (rows in order, thread-count independent).
     pub fn mean(&mut self, nx: usize, a: &[f64]) -> f64 {
-        let comm = self.split.as_ref().map(|(c, _)| &**c);
-        mean(&mut self.partial, nx, a, comm)
+        mean(&mut self.partial, nx, a, &mut self.sums)
     }
 }
 
@@ -207,19 +198,17 @@ fn apply<'a>(
     x: &'a [f64],
     out: &mut [f64],
     partial: &mut [f64],
-    split: Option<&'a mut (Arc<Comm>, Halo)>,
+    split: Option<&'a mut Halo>,
+    sums: &mut RowSums,
 ) -> f64 {
     let nx = grid.n[0];
     let three = grid.dim == 3;
-    let (comm, halo) = match split {
-        Some((c, h)) => {
-            if three {
-                h.fill_one(0, x);
-            }
-            (Some(&**c), Some(&*h))
+    let halo = split.map(|h| {
+        if three {
+            h.fill_one(0, x);
         }
-        None => (None, None),
-    };
+        &*h
+    });
     out.par_chunks_mut(nx)
         .zip(partial.par_iter_mut())
         .enumerate()
@@ -252,32 +241,25 @@ fn apply<'a>(
             for_row(nx, |i, im, ip| o[i] = node(i, im, ip));
             *xax = xc.iter().zip(o.iter()).map(|(x, y)| x * y).sum();
         });
-    total(partial, comm)
-}
-
-/// The rows' partial sums added in order, then over the processes (in rank order) when split.
-fn total(partial: &[f64], comm: Option<&Comm>) -> f64 {
-    let s = partial.iter().sum::<f64>();
-    comm.map_or(s, |c| c.sum_one(s))
+    sums.total(partial)
 }
 
 /// Σ a_i b_i, summed per row and then over rows in order (and processes).
-fn dot(partial: &mut [f64], nx: usize, a: &[f64], b: &[f64], comm: Option<&Comm>) -> f64 {
+fn dot(partial: &mut [f64], nx: usize, a: &[f64], b: &[f64], sums: &mut RowSums) -> f64 {
     partial.par_iter_mut().enumerate().for_each(|(row, s)| {
         let r = row * nx..(row + 1) * nx;
         *s = a[r.clone()].iter().zip(&b[r]).map(|(x, y)| x * y).sum();
     });
-    total(partial, comm)
+    sums.total(partial)
 }
 
 /// Mean of a field over the whole grid (rows in order, then processes).
-fn mean(partial: &mut [f64], nx: usize, a: &[f64], comm: Option<&Comm>) -> f64 {
+fn mean(partial: &mut [f64], nx: usize, a: &[f64], sums: &mut RowSums) -> f64 {
     partial
         .par_iter_mut()
         .enumerate()
         .for_each(|(row, s)| *s = a[row * nx..(row + 1) * nx].iter().sum());
-    let n = comm.map_or(a.len() as f64, |c| c.sum_one(a.len() as f64));
-    total(partial, comm) / n
+    sums.total(partial) / sums.whole_len(nx) as f64
 }
 
 /// Solves A φ = b (A = -h²∇·(β∇)) by preconditioned conjugate gradients from the φ it holds.
@@ -300,66 +282,68 @@ fn solve(
         partial,
         multigrid,
         split,
+        sums,
         ..
     } = s;
-    let comm = split.as_ref().map(|(c, _)| c.clone());
-    let comm = comm.as_deref();
     if let (Preconditioner::Multigrid, Some(mg)) = (with, multigrid.as_mut()) {
         mg.set_coefficients(beta);
     }
     // r holds b on entry; remove its mean (zero up to round-off: it is a divergence).
-    let mb = mean(partial, nx, r, comm);
+    let mb = mean(partial, nx, r, sums);
     r.par_iter_mut().for_each(|v| *v -= mb);
-    let bnorm = dot(partial, nx, r, r, comm).sqrt();
+    let bnorm = dot(partial, nx, r, r, sums).sqrt();
     if bnorm == 0.0 {
         phi.par_iter_mut().for_each(|v| *v = 0.0);
         return (0, 0.0);
     }
-    apply(grid, beta, phi, ap, partial, split.as_mut());
+    apply(grid, beta, phi, ap, partial, split.as_mut(), sums);
     r.par_iter_mut()
         .zip(ap.par_iter())
         .for_each(|(r, a)| *r -= a);
-    let mut rnorm = dot(partial, nx, r, r, comm).sqrt();
+    let mut rnorm = dot(partial, nx, r, r, sums).sqrt();
     if rnorm <= tolerance * bnorm {
         return (0, rnorm / bnorm);
     }
     // The preconditioner z = M r: M = A⁻¹ for β = 1, (-h² Lap_h)⁻¹ (one FFT pair), or one
     // multigrid V-cycle; returns r·z (the scaling and the dot product in one pass).
     let inv_h2 = 1.0 / (grid.h * grid.h);
-    let mut precondition =
-        |spectral: &mut Spectral, partial: &mut [f64], r: &[f64], z: &mut [f64]| {
-            let scale = match with {
-                Preconditioner::Spectral => {
-                    spectral.solve_laplacian(r, z);
-                    inv_h2
+    let mut precondition = |spectral: &mut Spectral,
+                            sums: &mut RowSums,
+                            partial: &mut [f64],
+                            r: &[f64],
+                            z: &mut [f64]| {
+        let scale = match with {
+            Preconditioner::Spectral => {
+                spectral.solve_laplacian(r, z);
+                inv_h2
+            }
+            Preconditioner::Multigrid => {
+                if let Some(mg) = multigrid.as_mut() {
+                    mg.apply(r, z);
                 }
-                Preconditioner::Multigrid => {
-                    if let Some(mg) = multigrid.as_mut() {
-                        mg.apply(r, z);
-                    }
-                    1.0
-                }
-            };
-            partial
-                .par_iter_mut()
-                .zip(z.par_chunks_mut(nx))
-                .zip(r.par_chunks(nx))
-                .for_each(|((s, z), r)| {
-                    if scale != 1.0 {
-                        for v in z.iter_mut() {
-                            *v *= scale;
-                        }
-                    }
-                    *s = r.iter().zip(z.iter()).map(|(x, y)| x * y).sum();
-                });
-            total(partial, comm)
+                1.0
+            }
         };
-    let mut rz = precondition(spectral, partial, r, z);
+        partial
+            .par_iter_mut()
+            .zip(z.par_chunks_mut(nx))
+            .zip(r.par_chunks(nx))
+            .for_each(|((s, z), r)| {
+                if scale != 1.0 {
+                    for v in z.iter_mut() {
+                        *v *= scale;
+                    }
+                }
+                *s = r.iter().zip(z.iter()).map(|(x, y)| x * y).sum();
+            });
+        sums.total(partial)
+    };
+    let mut rz = precondition(spectral, sums, partial, r, z);
     p.copy_from_slice(z);
     let mut it = 0;
     while it < MAX_ITERATIONS {
         it += 1;
-        let pap = apply(grid, beta, p, ap, partial, split.as_mut());
+        let pap = apply(grid, beta, p, ap, partial, split.as_mut(), sums);
         if pap <= 0.0 {
             break;
         }
@@ -377,11 +361,11 @@ fn solve(
                 }
                 *s = r.iter().map(|v| v * v).sum();
             });
-        rnorm = total(partial, comm).sqrt();
+        rnorm = sums.total(partial).sqrt();
         if rnorm <= tolerance * bnorm {
             break;
         }
-        let rz_new = precondition(spectral, partial, r, z);
+        let rz_new = precondition(spectral, sums, partial, r, z);
         let b = rz_new / rz;
         rz = rz_new;
         p.par_iter_mut()
