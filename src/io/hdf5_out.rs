@@ -6,7 +6,9 @@
 //! `(ny, nx)` in 2D with a trailing axis of 3 for vectors (z = 0 in 2D), see
 //! [`crate::io::xdmf::dataset_shape`]; and root attributes `time`, `step`, `origin`, `spacing`
 //! (x, y, z) and `dims` (nx, ny, nz). `series.h5` is described at [`create_series`].
-//! With bodies, `bodies_NNNNNN.h5` holds their surfaces ([`write_surfaces`]).
+//! With bodies, `bodies_NNNNNN.h5` holds their surfaces ([`write_surfaces`]). On several
+//! processes each writes its slab's `fields_NNNNNN_R.h5` with [`write_fields`] and
+//! `fields_NNNNNN.h5` holds virtual datasets made of them ([`write_virtual_fields`]).
 //!
 //! A snapshot file, and `series.h5` when it is created (with no rows), are written to a
 //! temporary name next to the target, closed, fsynced and renamed over it, so a killed run

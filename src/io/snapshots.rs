@@ -16,6 +16,9 @@
 //! and the periodic box's seam makes a second level), and, as in a run with a dynamic body, every snapshot also
 //! writes a slice image `slices/slice_NNNNNN.png` ([`crate::io::slices`]).
 //!
+//! On several processes the split driver writes the VTK snapshots as pieces ([`write_pieces`])
+//! and the HDF5 ones as pieces under a file of virtual datasets ([`SplitHdf5`]).
+//!
 //! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
 //! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
 //! (the snapshots written after the checkpoint removed, the indexes and `series.h5` rewritten).
