@@ -340,7 +340,7 @@ const HDF5_SCENE: &str = r#"Scene(
     fluid: (viscosity: 0.000625),
     numerics: (dt: Adaptive(c: 0.5, dt_max: 0.1), end_time: 0.6),
     initial: [TaylorGreen3d(amplitude: 1.0, wavenumber: 1.0)],
-    output: (every: 0.3, precision: Double, formats: [Hdf5]),
+    output: (every: 0.3, checkpoint_every: 0.3, precision: Double, formats: [Hdf5]),
 )"#;
 
 /// The box of [`HDF5_SCENE`]'s volume.
@@ -348,16 +348,17 @@ const HDF5_SCENE: &str = r#"Scene(
 const H5_VOLUME: f64 = TAU * (5.0 * PI / 3.0) * (37.0 * PI / 12.0);
 
 /// `tumble run` of an HDF5 scene on one process and under `mpirun -np 2` and `-np 3`, each
-/// split run's directory then moved: its `fields_NNNNNN.h5`, read through the HDF5 library,
-/// hold virtual datasets with the one-process file's names, shapes, types and root attributes,
-/// and values within 1e-12 of the largest; `fields.xmf` is the one-process index, and
-/// `series.h5` (rank 0's) the one-process series to 1e-12.
+/// split run then restarted from its first checkpoint (its last snapshot and `series.h5`'s
+/// later rows written again) and its directory moved: its `fields_NNNNNN.h5`, read through
+/// the HDF5 library, hold virtual datasets with the one-process file's names, shapes, types
+/// and root attributes, and values within 1e-12 of the largest; `fields.xmf` is the
+/// one-process index, and `series.h5` (rank 0's) the one-process series to 1e-12.
 #[cfg(feature = "hdf5")]
 pub fn hdf5_matches_one_process() -> Result<(), String> {
     use hdf5::dataset::Layout;
     let tumble = env!("CARGO_BIN_EXE_tumble");
     let dir = scratch("hdf5", "tg.ron", HDF5_SCENE)?;
-    let run = |np: usize, out: &str| -> Result<(), String> {
+    let run = |np: usize, args: &[&str]| -> Result<(), String> {
         let mut cmd = if np == 1 {
             Command::new(tumble)
         } else {
@@ -366,24 +367,32 @@ pub fn hdf5_matches_one_process() -> Result<(), String> {
             c
         };
         let st = cmd
-            .args(["run", "--quiet", "--out", out, "tg.ron"])
+            .args(["run", "--quiet"])
+            .args(args)
             .current_dir(&dir)
             .stdout(std::process::Stdio::null())
             .status()
             .map_err(|e| e.to_string())?;
-        st.success()
-            .then_some(())
-            .ok_or(format!("{out}: tumble run failed ({st})"))
+        st.success().then_some(()).ok_or(format!(
+            "tumble run {args:?} on {np} processes failed ({st})"
+        ))
     };
     let h5 = |e: hdf5::Error| e.to_string();
-    run(1, "one")?;
+    run(1, &["--out", "one", "tg.ron"])?;
     let one = dir.join("one");
     let xmf = |d: &Path| {
         std::fs::read_to_string(d.join("fields.xmf")).map_err(|e| format!("fields.xmf: {e}"))
     };
     for np in [2, 3] {
         let out = format!("np{np}");
-        run(np, &out)?;
+        run(np, &["--out", &out, "tg.ron"])?;
+        let first = std::fs::read_dir(dir.join(&out))
+            .map_err(|e| e.to_string())?
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.starts_with("checkpoint_") && !n.contains(".rank"))
+            .min()
+            .ok_or(format!("{out}: no checkpoint"))?;
+        run(np, &["--restart", &format!("{out}/{first}")])?;
         // The run directory moves: the virtual datasets name their pieces relative to it.
         let moved = dir.join(format!("moved{np}"));
         std::fs::rename(dir.join(&out), &moved).map_err(|e| e.to_string())?;
