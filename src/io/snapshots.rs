@@ -94,7 +94,7 @@ impl Snapshots {
                 .scene()
                 .output
                 .has_format(OutputFormat::Hdf5)
-                .then(|| Hdf5Outputs::new(dir, sim)),
+                .then(|| Hdf5Outputs::new(dir, sim, has_surfaces(sim))),
             count: 0,
         }
     }
@@ -146,7 +146,7 @@ impl Snapshots {
         };
         #[cfg(feature = "hdf5")]
         let hdf5 = if sim.scene().output.has_format(OutputFormat::Hdf5) {
-            Some(Hdf5Outputs::resume(dir, sim, count)?)
+            Some(Hdf5Outputs::resume(dir, sim, count, has_surfaces(sim))?)
         } else {
             None
         };
@@ -439,7 +439,9 @@ enum SeriesFile {
 
 #[cfg(feature = "hdf5")]
 impl Hdf5Outputs {
-    fn new(dir: &Path, sim: &Simulation) -> Self {
+    /// The outputs of `sim`'s run in `dir`; `surfaces`: whether snapshots write the body
+    /// surfaces (`bodies.xmf`).
+    fn new(dir: &Path, sim: &Simulation, surfaces: bool) -> Self {
         use crate::io::hdf5_out::{BodySeries, ContactSeries, Series};
         use crate::scene::BodyKind;
         let scene = sim.scene();
@@ -466,7 +468,7 @@ impl Hdf5Outputs {
         Hdf5Outputs {
             xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), &sim.grid().whole())
                 .with_precision(sim.scene().output.precision),
-            bodies: has_surfaces(sim).then(|| {
+            bodies: surfaces.then(|| {
                 crate::io::xdmf::SurfaceXdmf::new(
                     dir.join("bodies.xmf"),
                     &SURFACE_VECTORS,
@@ -485,9 +487,9 @@ impl Hdf5Outputs {
     }
 
     /// The outputs of a restarted run after `count` snapshots (see [`Snapshots::resume`]).
-    fn resume(dir: &Path, sim: &Simulation, count: usize) -> Result<Self, String> {
+    fn resume(dir: &Path, sim: &Simulation, count: usize, surfaces: bool) -> Result<Self, String> {
         use crate::io::xdmf::XdmfEntry;
-        let mut h = Hdf5Outputs::new(dir, sim);
+        let mut h = Hdf5Outputs::new(dir, sim, surfaces);
         let (t0, step0) = (sim.time(), sim.steps());
         // A snapshot's fields depend on the scene only: the same for every snapshot.
         let attributes = with_fields(sim, xdmf_attributes);
@@ -794,7 +796,9 @@ pub fn write_pieces(dir: &Path, count: usize, sim: &Simulation) -> anyhow::Resul
 /// pieces ([`crate::io::hdf5_out::write_virtual_fields`]): h5py, ParaView and the HDF5 library
 /// read it as the one-process file, names, shapes and values. Rank 0 alone keeps `fields.xmf`
 /// and `series.h5`, as on one process (the time series are global, the same on every
-/// process). Nothing is gathered: each process writes only its slab.
+/// process). Nothing is gathered: each process writes only its slab. The bodies' surfaces
+/// (`bodies_NNNNNN.h5`, `bodies.xmf`) are not written on several processes, as their VTK
+/// files are not.
 pub struct SplitHdf5 {
     /// Rank 0's outputs: the index and `series.h5`.
     #[cfg(feature = "hdf5")]
@@ -810,7 +814,7 @@ impl SplitHdf5 {
         }
         #[cfg(feature = "hdf5")]
         return Some(SplitHdf5 {
-            root: root.then(|| Hdf5Outputs::new(dir, sim)),
+            root: root.then(|| Hdf5Outputs::new(dir, sim, false)),
         });
         #[cfg(not(feature = "hdf5"))]
         {
@@ -832,7 +836,7 @@ impl SplitHdf5 {
         #[cfg(feature = "hdf5")]
         if sim.scene().output.has_format(OutputFormat::Hdf5) {
             let root = if root {
-                Some(Hdf5Outputs::resume(dir, sim, count)?)
+                Some(Hdf5Outputs::resume(dir, sim, count, false)?)
             } else {
                 None
             };
