@@ -5,7 +5,8 @@
 //! it runs the checks of `tests/distributed/checks.rs` (the suite runs the same checks on one
 //! process), each against the whole computation done on every process. Then `tumble run` itself
 //! (`tests/distributed/run.rs`): a scene run by `mpirun -np 2` and `-np 3` gives the
-//! one-process run's `series.csv` and snapshots.
+//! one-process run's `series.csv` and snapshots, and with the `hdf5` feature
+//! its HDF5 snapshots and `series.h5`.
 
 #[path = "distributed/checks.rs"]
 mod checks;
@@ -183,6 +184,11 @@ fn main() {
         (
             "other commands refuse several processes",
             run::other_commands_refuse_several_processes,
+        ),
+        #[cfg(feature = "hdf5")]
+        (
+            "HDF5 snapshots under mpirun read as one process's",
+            run::hdf5_matches_one_process,
         ),
     ] {
         match test() {

@@ -6,7 +6,9 @@
 //! `(ny, nx)` in 2D with a trailing axis of 3 for vectors (z = 0 in 2D), see
 //! [`crate::io::xdmf::dataset_shape`]; and root attributes `time`, `step`, `origin`, `spacing`
 //! (x, y, z) and `dims` (nx, ny, nz). `series.h5` is described at [`create_series`].
-//! With bodies, `bodies_NNNNNN.h5` holds their surfaces ([`write_surfaces`]).
+//! With bodies, `bodies_NNNNNN.h5` holds their surfaces ([`write_surfaces`]). On several
+//! processes each writes its slab's `fields_NNNNNN_R.h5` with [`write_fields`] and
+//! `fields_NNNNNN.h5` holds virtual datasets made of them ([`write_virtual_fields`]).
 //!
 //! A snapshot file, and `series.h5` when it is created (with no rows), are written to a
 //! temporary name next to the target, closed, fsynced and renamed over it, so a killed run
@@ -138,14 +140,7 @@ pub fn write_fields(
         }
     }
     atomic_h5(path, |file| {
-        scalar_f64(file, "time", time)?;
-        file.new_attr::<u64>().create("step")?.write_scalar(&step)?;
-        attr_f64(file, "origin", &grid.origin)?;
-        attr_f64(file, "spacing", &[grid.h; 3])?;
-        file.new_attr::<u64>()
-            .shape([3])
-            .create("dims")?
-            .write_raw(&grid.n.map(|n| n as u64)[..])?;
+        root_attributes(file, grid, time, step)?;
         let mut buf: Vec<f64> = Vec::new();
         for f in fields {
             let nc = f.components.len();
@@ -165,6 +160,85 @@ pub fn write_fields(
         }
         Ok(())
     })
+}
+
+/// One process's piece of a snapshot split over processes: its file (relative to the
+/// directory of the snapshot's index file) and the whole grid's z-planes it holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Piece {
+    /// The piece's file, written by [`write_fields`] on its slab.
+    pub file: String,
+    /// The z-planes of the whole grid it holds, in order.
+    pub planes: std::ops::Range<usize>,
+}
+
+/// Write the snapshot file of a run split over processes: the root attributes of
+/// [`write_fields`] for the whole grid `whole`, and for each of `fields` (name and 1 or 3
+/// components) a virtual dataset (HDF5 1.10's VDS) of the whole grid's shape whose planes of
+/// each of `pieces` are the same dataset of that piece's file. A reader sees the one-process
+/// file's datasets (names, shapes, types, values); the library opens the pieces as it reads,
+/// found by their names relative to this file's directory, so the run directory may move.
+/// Atomic, as [`write_fields`]; a missing piece reads as zeros.
+pub fn write_virtual_fields(
+    path: &Path,
+    whole: &Grid,
+    time: f64,
+    step: u64,
+    fields: &[(&str, usize)],
+    precision: Precision,
+    pieces: &[Piece],
+) -> io::Result<()> {
+    atomic_h5(path, |file| {
+        root_attributes(file, whole, time, step)?;
+        for &(name, components) in fields {
+            let shape = dataset_shape(whole, components);
+            match precision {
+                Precision::Double => virtual_dataset::<f64>(file, name, &shape, pieces)?,
+                Precision::Single => virtual_dataset::<f32>(file, name, &shape, pieces)?,
+            }
+        }
+        Ok(())
+    })
+}
+
+/// A virtual dataset `name` of `shape` (slowest axis the z-planes) in `file`, mapping each
+/// piece's planes to its file's dataset `name`, whole.
+fn virtual_dataset<T: hdf5::H5Type>(
+    file: &hdf5::File,
+    name: &str,
+    shape: &[usize],
+    pieces: &[Piece],
+) -> hdf5::Result<()> {
+    use hdf5::{Hyperslab, Selection, SliceOrIndex};
+    let mut b = file.new_dataset::<T>().shape(shape);
+    for p in pieces {
+        let mut src = shape.to_vec();
+        src[0] = p.planes.len();
+        let mut slab: Vec<SliceOrIndex> = shape.iter().map(|&n| (0..n).into()).collect();
+        slab[0] = p.planes.clone().into();
+        b = b.virtual_map(
+            &p.file,
+            format!("/{name}"),
+            src,
+            Selection::All,
+            shape.to_vec(),
+            Selection::Hyperslab(Hyperslab::from(slab)),
+        );
+    }
+    b.create(name).map(drop)
+}
+
+/// The root attributes of a snapshot file on `grid`: `time`, `step`, `origin`, `spacing`,
+/// `dims`.
+fn root_attributes(file: &hdf5::File, grid: &Grid, time: f64, step: u64) -> hdf5::Result<()> {
+    scalar_f64(file, "time", time)?;
+    file.new_attr::<u64>().create("step")?.write_scalar(&step)?;
+    attr_f64(file, "origin", &grid.origin)?;
+    attr_f64(file, "spacing", &[grid.h; 3])?;
+    file.new_attr::<u64>()
+        .shape([3])
+        .create("dims")?
+        .write_raw(&grid.n.map(|n| n as u64)[..])
 }
 
 /// The time series of one body, one entry per recorded step.

@@ -16,6 +16,9 @@
 //! and the periodic box's seam makes a second level), and, as in a run with a dynamic body, every snapshot also
 //! writes a slice image `slices/slice_NNNNNN.png` ([`crate::io::slices`]).
 //!
+//! On several processes the split driver writes the VTK snapshots as pieces ([`write_pieces`])
+//! and the HDF5 ones as pieces under a file of virtual datasets ([`SplitHdf5`]).
+//!
 //! A restarted run picks them up with [`Snapshots::resume`] (what the checkpoint's
 //! [`RunProgress`] says, and for HDF5 the files kept, read back) and [`Snapshots::cut_back`]
 //! (the snapshots written after the checkpoint removed, the indexes and `series.h5` rewritten).
@@ -91,7 +94,7 @@ impl Snapshots {
                 .scene()
                 .output
                 .has_format(OutputFormat::Hdf5)
-                .then(|| Hdf5Outputs::new(dir, sim)),
+                .then(|| Hdf5Outputs::new(dir, sim, has_surfaces(sim))),
             count: 0,
         }
     }
@@ -143,7 +146,7 @@ impl Snapshots {
         };
         #[cfg(feature = "hdf5")]
         let hdf5 = if sim.scene().output.has_format(OutputFormat::Hdf5) {
-            Some(Hdf5Outputs::resume(dir, sim, count)?)
+            Some(Hdf5Outputs::resume(dir, sim, count, has_surfaces(sim))?)
         } else {
             None
         };
@@ -436,7 +439,9 @@ enum SeriesFile {
 
 #[cfg(feature = "hdf5")]
 impl Hdf5Outputs {
-    fn new(dir: &Path, sim: &Simulation) -> Self {
+    /// The outputs of `sim`'s run in `dir`; `surfaces`: whether snapshots write the body
+    /// surfaces (`bodies.xmf`).
+    fn new(dir: &Path, sim: &Simulation, surfaces: bool) -> Self {
         use crate::io::hdf5_out::{BodySeries, ContactSeries, Series};
         use crate::scene::BodyKind;
         let scene = sim.scene();
@@ -461,9 +466,9 @@ impl Hdf5Outputs {
             .any(|b| matches!(b.kind, BodyKind::Dynamic))
             .then(ContactSeries::default);
         Hdf5Outputs {
-            xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), sim.grid())
+            xmf: crate::io::xdmf::XdmfSeries::new(dir.join("fields.xmf"), &sim.grid().whole())
                 .with_precision(sim.scene().output.precision),
-            bodies: has_surfaces(sim).then(|| {
+            bodies: surfaces.then(|| {
                 crate::io::xdmf::SurfaceXdmf::new(
                     dir.join("bodies.xmf"),
                     &SURFACE_VECTORS,
@@ -482,9 +487,9 @@ impl Hdf5Outputs {
     }
 
     /// The outputs of a restarted run after `count` snapshots (see [`Snapshots::resume`]).
-    fn resume(dir: &Path, sim: &Simulation, count: usize) -> Result<Self, String> {
+    fn resume(dir: &Path, sim: &Simulation, count: usize, surfaces: bool) -> Result<Self, String> {
         use crate::io::xdmf::XdmfEntry;
-        let mut h = Hdf5Outputs::new(dir, sim);
+        let mut h = Hdf5Outputs::new(dir, sim, surfaces);
         let (t0, step0) = (sim.time(), sim.steps());
         // A snapshot's fields depend on the scene only: the same for every snapshot.
         let attributes = with_fields(sim, xdmf_attributes);
@@ -506,9 +511,12 @@ impl Hdf5Outputs {
                 attributes: attributes.clone(),
             });
         }
-        h.xmf =
-            crate::io::xdmf::XdmfSeries::with_entries(dir.join("fields.xmf"), sim.grid(), entries)
-                .with_precision(sim.scene().output.precision);
+        h.xmf = crate::io::xdmf::XdmfSeries::with_entries(
+            dir.join("fields.xmf"),
+            &sim.grid().whole(),
+            entries,
+        )
+        .with_precision(sim.scene().output.precision);
         if h.bodies.is_some() {
             let mut entries = Vec::with_capacity(count);
             for k in 0..count {
@@ -778,4 +786,187 @@ pub fn write_pieces(dir: &Path, count: usize, sim: &Simulation) -> anyhow::Resul
     // The index names every piece: it is complete once they all are.
     d.comm.barrier();
     Ok(index)
+}
+
+/// The HDF5 snapshots of a run split over processes (a scene asking for `Hdf5`; see
+/// [`write_pieces`] for VTK). Every process writes its slab of each snapshot as a file of its
+/// own, `fields_NNNNNN_R.h5` (R its rank; the datasets of a one-process snapshot on the slab's
+/// planes, its attributes those of the slab as a grid of its own), and rank 0 writes
+/// `fields_NNNNNN.h5`, whose datasets are HDF5 virtual datasets of the whole grid made of the
+/// pieces ([`crate::io::hdf5_out::write_virtual_fields`]): h5py, ParaView and the HDF5 library
+/// read it as the one-process file, names, shapes and values. Rank 0 alone keeps `fields.xmf`
+/// and `series.h5`, as on one process (the time series are global, the same on every
+/// process). Nothing is gathered: each process writes only its slab. The bodies' surfaces
+/// (`bodies_NNNNNN.h5`, `bodies.xmf`) are not written on several processes, as their VTK
+/// files are not.
+pub struct SplitHdf5 {
+    /// Rank 0's outputs: the index and `series.h5`.
+    #[cfg(feature = "hdf5")]
+    root: Option<Hdf5Outputs>,
+}
+
+impl SplitHdf5 {
+    /// The HDF5 outputs of `sim`'s split run in `dir`, if its scene asks for them (`root`:
+    /// whether this is rank 0). Nothing is written yet.
+    pub fn new(dir: &Path, sim: &Simulation, root: bool) -> Option<Self> {
+        if !sim.scene().output.has_format(OutputFormat::Hdf5) {
+            return None;
+        }
+        #[cfg(feature = "hdf5")]
+        return Some(SplitHdf5 {
+            root: root.then(|| Hdf5Outputs::new(dir, sim, false)),
+        });
+        #[cfg(not(feature = "hdf5"))]
+        {
+            // A scene asking for HDF5 is refused by a build without it.
+            let _ = (dir, root);
+            None
+        }
+    }
+
+    /// The outputs of a restarted split run after `count` snapshots, read back on rank 0 as
+    /// [`Snapshots::resume`] does (the snapshot files' times, `series.h5`'s lengths). Nothing
+    /// is changed (see [`cut_back`](SplitHdf5::cut_back)).
+    pub fn resume(
+        dir: &Path,
+        sim: &Simulation,
+        count: usize,
+        root: bool,
+    ) -> Result<Option<Self>, String> {
+        #[cfg(feature = "hdf5")]
+        if sim.scene().output.has_format(OutputFormat::Hdf5) {
+            let root = if root {
+                Some(Hdf5Outputs::resume(dir, sim, count, false)?)
+            } else {
+                None
+            };
+            return Ok(Some(SplitHdf5 { root }));
+        }
+        let _ = (dir, sim, count, root);
+        Ok(None)
+    }
+
+    /// Make the run directory match a resumed run of `count` snapshots: each process removes
+    /// its pieces of the later snapshots, rank 0 their files, rewrites `fields.xmf` and cuts
+    /// `series.h5` back to the checkpoint.
+    pub fn cut_back(&mut self, dir: &Path, count: usize, rank: usize) -> anyhow::Result<()> {
+        for k in count.. {
+            let piece = dir.join(format!("fields_{k:06}_{rank}.h5"));
+            let index = dir.join(format!("fields_{k:06}.h5"));
+            if !piece.is_file() && !index.is_file() {
+                break;
+            }
+            let mine = [Some(piece), (rank == 0).then_some(index)];
+            for f in mine.iter().flatten().filter(|f| f.is_file()) {
+                std::fs::remove_file(f)
+                    .with_context(|| format!("cannot remove {}", f.display()))?;
+            }
+        }
+        #[cfg(feature = "hdf5")]
+        if let Some(h) = self.root.as_mut() {
+            h.xmf.write().context("cannot write fields.xmf")?;
+            h.cut_back(dir)?;
+        }
+        Ok(())
+    }
+
+    /// Record the state after a step for `series.h5` (rank 0).
+    pub fn record(&mut self, sim: &mut Simulation) {
+        #[cfg(feature = "hdf5")]
+        if let Some(h) = self.root.as_mut() {
+            h.record(sim);
+        }
+        #[cfg(not(feature = "hdf5"))]
+        let _ = sim;
+    }
+
+    /// Snapshot `count`: every process writes its piece, rank 0 the whole snapshot's file;
+    /// once every process has written, rank 0 lists it in `fields.xmf` and appends the rows
+    /// recorded since the last snapshot to `series.h5`. Collective: every process calls it at
+    /// the same snapshot, and all fail if one does.
+    pub fn snapshot(&mut self, dir: &Path, count: usize, sim: &Simulation) -> anyhow::Result<()> {
+        #[cfg(feature = "hdf5")]
+        {
+            use crate::io::hdf5_out::{Piece, write_fields, write_virtual_fields};
+            use crate::parallel::Decomposition;
+            let d = sim
+                .world
+                .get_resource::<Decomposition>()
+                .expect("split HDF5 snapshots: a split run");
+            let (rank, ranks) = (d.slabs.rank, d.slabs.ranks);
+            let slab = sim.grid();
+            let whole = slab.whole();
+            let precision = sim.scene().output.precision;
+            let file = format!("fields_{count:06}.h5");
+            let piece = |r: usize| format!("fields_{count:06}_{r}.h5");
+            let written = with_fields(sim, |fields| -> anyhow::Result<Vec<_>> {
+                // The slab as a grid of its own: its first plane's position, its planes.
+                let mut origin = slab.origin;
+                origin[2] += slab.k0 as f64 * slab.h;
+                let own = crate::base::grid::Grid::new(slab.n, slab.h, origin);
+                write_fields(
+                    &dir.join(piece(rank)),
+                    &own,
+                    sim.time(),
+                    sim.steps(),
+                    fields,
+                    precision,
+                )
+                .with_context(|| format!("cannot write {}", piece(rank)))?;
+                let names: Vec<(&str, usize)> = fields
+                    .iter()
+                    .map(|f| (f.name, if f.components.len() == 1 { 1 } else { 3 }))
+                    .collect();
+                if rank == 0 {
+                    let pieces: Vec<Piece> = (0..ranks)
+                        .map(|r| Piece {
+                            file: piece(r),
+                            planes: d.slabs.planes(r),
+                        })
+                        .collect();
+                    write_virtual_fields(
+                        &dir.join(&file),
+                        &whole,
+                        sim.time(),
+                        sim.steps(),
+                        &names,
+                        precision,
+                        &pieces,
+                    )
+                    .with_context(|| format!("cannot write {file}"))?;
+                }
+                Ok(xdmf_attributes(fields))
+            });
+            // The snapshot is complete once every process has written its part.
+            let failed = d.comm.max_one(f64::from(u8::from(written.is_err())));
+            let attributes = written?;
+            if failed > 0.0 {
+                anyhow::bail!("another process could not write its piece of {file}");
+            }
+            if let Some(h) = self.root.as_mut() {
+                h.xmf
+                    .push(crate::io::xdmf::XdmfEntry {
+                        time: sim.time(),
+                        file,
+                        attributes,
+                    })
+                    .context("cannot write fields.xmf")?;
+                h.write_series(dir)?;
+            }
+        }
+        #[cfg(not(feature = "hdf5"))]
+        let _ = (dir, count, sim);
+        Ok(())
+    }
+
+    /// Append the rows kept in memory to `series.h5` (rank 0): at a checkpoint and at the end.
+    pub fn finish(&mut self, dir: &Path) -> anyhow::Result<()> {
+        #[cfg(feature = "hdf5")]
+        if let Some(h) = self.root.as_mut() {
+            h.write_series(dir)?;
+        }
+        #[cfg(not(feature = "hdf5"))]
+        let _ = dir;
+        Ok(())
+    }
 }

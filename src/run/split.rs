@@ -3,7 +3,10 @@
 //! and writes the time series, the log, the plots and the index of each snapshot, and every
 //! process writes its piece of each snapshot ([`crate::io::snapshots::write_pieces`]) and of
 //! each checkpoint ([`checkpoint::piece_file_name`]: rank 0's is the usual
-//! `checkpoint_NNNNNN.bin`, which carries the scene and the run's progress).
+//! `checkpoint_NNNNNN.bin`, which carries the scene and the run's progress). With HDF5 output
+//! each process writes its piece of each snapshot and rank 0 a file of virtual datasets that
+//! reads as the whole snapshot, `fields.xmf` and `series.h5`
+//! ([`crate::io::snapshots::SplitHdf5`]).
 //!
 //! The clock is the one-process run's: the same output times, landed on the same way, so the
 //! time series are the one-process run's to round-off (the sums over the grid are added in a
@@ -12,10 +15,11 @@
 //! --restart DIR`) needs the same number of processes and continues bit for bit.
 //!
 //! The bodies are held whole by every process (their sums over the grid are added over the
-//! processes), so rank 0 writes `bodies.csv` and `contacts.csv` from its own copy.
+//! processes), so rank 0 writes `bodies.csv` and `contacts.csv` from its own copy, and with HDF5
+//! output their series in `series.h5`.
 //!
-//! Not yet on several processes: HDF5 output and free surfaces (refused before anything is
-//! written, with the reason).
+//! Not yet on several processes: free surfaces (refused before anything is written, with the
+//! reason).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -30,18 +34,10 @@ use super::{
 use crate::io::checkpoint::{self, Checkpoint, RunProgress};
 use crate::io::output::{PvdSeries, atomic_write};
 use crate::io::runlog::RunLog;
+use crate::io::snapshots::SplitHdf5;
 use crate::parallel::Comm;
 use crate::scene::{OutputFormat, ValidScene};
 use crate::sim::engine::Simulation;
-
-/// What a split run cannot do yet, if the scene asks for it.
-fn unsupported(scene: &ValidScene) -> Option<&'static str> {
-    scene
-        .output
-        .formats
-        .contains(&OutputFormat::Hdf5)
-        .then_some("HDF5 output")
-}
 
 /// The state of a split run's outputs: rank 0's files, and where every process stands.
 struct Outputs {
@@ -55,6 +51,8 @@ struct Outputs {
     pvd: Option<PvdSeries>,
     /// Whether snapshots have fields to write.
     vtk: bool,
+    /// HDF5 snapshots and `series.h5` (a scene asking for them).
+    hdf5: Option<SplitHdf5>,
     /// Snapshots written.
     count: usize,
     next_out: Option<f64>,
@@ -73,12 +71,6 @@ pub fn run_split(
     let wall0 = Instant::now();
     let scene = apply_overrides(scene, opts)?;
     // A scene that cannot split is refused (exit status 2) before anything is written.
-    if let Some(what) = unsupported(&scene) {
-        return Err(super::RefusedRun(format!(
-            "{what} on several processes: not yet (run on one process)"
-        ))
-        .into());
-    }
     if let Err(e) = crate::sim::engine::split_scene(&scene, comm.clone()) {
         return Err(super::RefusedRun(format!("{e:#}")).into());
     }
@@ -126,6 +118,7 @@ pub fn run_split(
         },
         pvd: (root && vtk(&sim)).then(|| PvdSeries::new(dir.join("fields.pvd"))),
         vtk: vtk(&sim),
+        hdf5: SplitHdf5::new(&dir, &sim, root),
         count: 0,
         next_out: every.map(|e| e.min(end)),
         next_ckpt: scene.output.checkpoint_every,
@@ -173,6 +166,10 @@ pub fn restart_split(
     let sim = agree(&comm, built, "restore the checkpoint")?;
     let p = &ck0.progress;
     let root = comm.is_root();
+    // The HDF5 snapshots kept and series.h5, read back by rank 0 (nothing is changed yet).
+    let resumed = SplitHdf5::resume(&dir, &sim, p.snapshots as usize, root)
+        .map_err(|m| anyhow::Error::from(ck0.error(m)));
+    let mut hdf5 = agree(&comm, resumed, "read the run's HDF5 files back")?;
     let mut log = None;
     // Rank 0's files cut back to the checkpoint; every process drops its later checkpoints.
     type Csvs = (SeriesCsv, Option<BodiesCsv>, Option<ContactsCsv>);
@@ -201,6 +198,9 @@ pub fn restart_split(
                         .with_context(|| format!("cannot remove {}", f.display()))?;
                 }
             }
+        }
+        if let Some(h) = hdf5.as_mut() {
+            h.cut_back(&dir, p.snapshots as usize, rank)?;
         }
         if !root {
             return Ok(None);
@@ -252,6 +252,7 @@ pub fn restart_split(
         pvd: (root && vtk(&sim))
             .then(|| PvdSeries::with_entries(dir.join("fields.pvd"), p.pvd.clone())),
         vtk: vtk(&sim),
+        hdf5,
         count: p.snapshots as usize,
         next_out: p.next_out,
         next_ckpt: scene
@@ -359,6 +360,11 @@ impl Outputs {
                 p.push(sim.time(), &index)
                     .context("cannot write fields.pvd")?;
             }
+        }
+        if let Some(h) = self.hdf5.as_mut() {
+            h.snapshot(&self.dir, self.count, sim)?;
+        }
+        if self.vtk || self.hdf5.is_some() {
             self.count += 1;
         }
         Ok(())
@@ -367,6 +373,10 @@ impl Outputs {
     /// Every process writes its piece of a checkpoint (rank 0's with the run's progress), then
     /// each removes its pieces of the checkpoints beyond `output.checkpoints_kept`.
     fn checkpoint(&mut self, sim: &mut Simulation, comm: &Comm) -> anyhow::Result<()> {
+        // series.h5 holds every step up to the checkpoint (a restart reads it back).
+        if let Some(h) = self.hdf5.as_mut() {
+            h.finish(&self.dir)?;
+        }
         let series_len = match self.series.as_mut() {
             Some(s) => {
                 s.flush()?;
@@ -447,6 +457,9 @@ fn drive_split(
     let root = comm.is_root();
     let steps0 = sim.steps();
     if first {
+        if let Some(h) = out.hdf5.as_mut() {
+            h.record(&mut sim);
+        }
         out.snapshot(&sim)?;
         if let Some(s) = out.series.as_mut() {
             s.row(&sim)?;
@@ -491,6 +504,9 @@ fn drive_split(
             }
             if let Some(c) = out.contacts.as_mut() {
                 c.rows(&sim)?;
+            }
+            if let Some(h) = out.hdf5.as_mut() {
+                h.record(&mut sim);
             }
             add_timings(&mut totals, &sim.timings().last);
             if root {
@@ -548,6 +564,9 @@ fn drive_split(
     }
     if let Some(c) = out.contacts.as_mut() {
         c.flush()?;
+    }
+    if let Some(h) = out.hdf5.as_mut() {
+        h.finish(&out.dir)?;
     }
     let summary = RunSummary {
         dir: out.dir.clone(),

@@ -330,3 +330,158 @@ pub fn other_commands_refuse_several_processes() -> Result<(), String> {
         code => Err(format!("exit status {code:?}, 2 expected")),
     }
 }
+
+/// A Taylor-Green vortex at 24 x 20 x 37 (slabs of 19 and 18 planes on two processes, 13, 12
+/// and 12 on three) with three HDF5 snapshots in double precision, and no VTK.
+#[cfg(feature = "hdf5")]
+const HDF5_SCENE: &str = r#"Scene(
+    name: "tg-h5",
+    domain: (extent: [6.283185307179586, 5.235987755982989, 9.686577348568527], cells: [24, 20, 37]),
+    fluid: (viscosity: 0.000625),
+    numerics: (dt: Adaptive(c: 0.5, dt_max: 0.1), end_time: 0.6),
+    initial: [TaylorGreen3d(amplitude: 1.0, wavenumber: 1.0)],
+    output: (every: 0.3, checkpoint_every: 0.3, precision: Double, formats: [Hdf5]),
+)"#;
+
+/// The box of [`HDF5_SCENE`]'s volume.
+#[cfg(feature = "hdf5")]
+const H5_VOLUME: f64 = TAU * (5.0 * PI / 3.0) * (37.0 * PI / 12.0);
+
+/// `tumble run` of an HDF5 scene on one process and under `mpirun -np 2` and `-np 3`, each
+/// split run then restarted from its first checkpoint (its last snapshot and `series.h5`'s
+/// later rows written again) and its directory moved: its `fields_NNNNNN.h5`, read through
+/// the HDF5 library, hold virtual datasets with the one-process file's names, shapes, types
+/// and root attributes, and values within 1e-12 of the largest; `fields.xmf` is the
+/// one-process index, and `series.h5` (rank 0's) the one-process series to 1e-12.
+#[cfg(feature = "hdf5")]
+pub fn hdf5_matches_one_process() -> Result<(), String> {
+    use hdf5::dataset::Layout;
+    let tumble = env!("CARGO_BIN_EXE_tumble");
+    let dir = scratch("hdf5", "tg.ron", HDF5_SCENE)?;
+    let run = |np: usize, args: &[&str]| -> Result<(), String> {
+        let mut cmd = if np == 1 {
+            Command::new(tumble)
+        } else {
+            let mut c = mpirun(np);
+            c.arg(tumble);
+            c
+        };
+        let st = cmd
+            .args(["run", "--quiet"])
+            .args(args)
+            .current_dir(&dir)
+            .stdout(std::process::Stdio::null())
+            .status()
+            .map_err(|e| e.to_string())?;
+        st.success().then_some(()).ok_or(format!(
+            "tumble run {args:?} on {np} processes failed ({st})"
+        ))
+    };
+    let h5 = |e: hdf5::Error| e.to_string();
+    run(1, &["--out", "one", "tg.ron"])?;
+    let one = dir.join("one");
+    let xmf = |d: &Path| {
+        std::fs::read_to_string(d.join("fields.xmf")).map_err(|e| format!("fields.xmf: {e}"))
+    };
+    for np in [2, 3] {
+        let out = format!("np{np}");
+        run(np, &["--out", &out, "tg.ron"])?;
+        let first = std::fs::read_dir(dir.join(&out))
+            .map_err(|e| e.to_string())?
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.starts_with("checkpoint_") && !n.contains(".rank"))
+            .min()
+            .ok_or(format!("{out}: no checkpoint"))?;
+        run(np, &["--restart", &format!("{out}/{first}")])?;
+        // The run directory moves: the virtual datasets name their pieces relative to it.
+        let moved = dir.join(format!("moved{np}"));
+        std::fs::rename(dir.join(&out), &moved).map_err(|e| e.to_string())?;
+        if xmf(&moved)? != xmf(&one)? {
+            return Err(format!(
+                "{out}: fields.xmf differs from the one-process index"
+            ));
+        }
+        for snap in 0..3 {
+            let name = format!("fields_{snap:06}.h5");
+            let a = hdf5::File::open(one.join(&name)).map_err(h5)?;
+            let b = hdf5::File::open(moved.join(&name)).map_err(h5)?;
+            let what = |s: &str| format!("{out}/{name}: {s}");
+            let names = a.member_names().map_err(h5)?;
+            if names != b.member_names().map_err(h5)? || names.is_empty() {
+                return Err(what(&format!(
+                    "datasets {names:?} against {:?}",
+                    b.member_names()
+                )));
+            }
+            for attr in ["time", "step", "origin", "spacing", "dims"] {
+                let (x, y) = (a.attr(attr).map_err(h5)?, b.attr(attr).map_err(h5)?);
+                let same = match attr {
+                    "step" | "dims" => x.read_raw::<u64>().ok() == y.read_raw::<u64>().ok(),
+                    _ => x.read_raw::<f64>().ok() == y.read_raw::<f64>().ok(),
+                };
+                if !same {
+                    return Err(what(&format!("attribute {attr} differs")));
+                }
+            }
+            for n in &names {
+                let (x, y) = (a.dataset(n).map_err(h5)?, b.dataset(n).map_err(h5)?);
+                if y.layout() != Layout::Virtual {
+                    return Err(what(&format!("{n} is not a virtual dataset")));
+                }
+                if x.shape() != y.shape() || x.dtype().map_err(h5)? != y.dtype().map_err(h5)? {
+                    return Err(what(&format!(
+                        "{n}: shape {:?} against {:?}",
+                        x.shape(),
+                        y.shape()
+                    )));
+                }
+                let (x, y) = (
+                    x.read_raw::<f64>().map_err(h5)?,
+                    y.read_raw::<f64>().map_err(h5)?,
+                );
+                let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let d = x
+                    .iter()
+                    .zip(&y)
+                    .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+                let nan = y.iter().any(|v| v.is_nan());
+                if x.len() != y.len() || nan || d > 1e-12 * scale || scale == 0.0 {
+                    return Err(what(&format!("{n}: max difference {d:e} of {scale:e}")));
+                }
+            }
+        }
+        let series = |d: &Path| -> Result<Vec<Vec<f64>>, String> {
+            let f = hdf5::File::open(d.join("series.h5")).map_err(h5)?;
+            ["t", "dt", "energy", "enstrophy", "circulation", "max_omega"]
+                .iter()
+                .map(|c| f.dataset(&format!("series/{c}")).and_then(|s| s.read_raw()))
+                .collect::<Result<_, _>>()
+                .map_err(h5)
+        };
+        let (a, b) = (series(&one)?, series(&moved)?);
+        for (c, (x, y)) in a.iter().zip(&b).enumerate() {
+            if x.len() != y.len() || x.is_empty() {
+                return Err(format!(
+                    "{out}/series.h5: {} rows, one process {}",
+                    y.len(),
+                    x.len()
+                ));
+            }
+            for (i, (p, q)) in x.iter().zip(y).enumerate() {
+                // The circulation, zero up to round-off, against max|ω| times the volume.
+                let scale = if c == 4 {
+                    a[5][i] * H5_VOLUME
+                } else {
+                    p.abs().max(q.abs()).max(1e-300)
+                };
+                if q.is_nan() || (p - q).abs() > 1e-12 * scale {
+                    return Err(format!(
+                        "{out}/series.h5 column {c} row {i}: {p} against {q}"
+                    ));
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
