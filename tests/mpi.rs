@@ -111,17 +111,17 @@ const CHECKS: &[Check] = &[
     (
         "spectral_matches_whole",
         |c| checks::spectral_matches_whole(c, [16, 10, 18]),
-        1e-12,
+        0.0,
     ),
     (
         "taylor_green_matches_whole",
         |c| checks::simulation_matches_whole(c, checks::TAYLOR_GREEN, 12),
-        1e-12,
+        0.0,
     ),
     (
         "vortex_ring_matches_whole",
         |c| checks::simulation_matches_whole(c, checks::VORTEX_RING, 12),
-        1e-12,
+        0.0,
     ),
     (
         "split_runs_are_bit_identical",
@@ -172,6 +172,10 @@ fn main() {
         (
             "tumble run under mpirun matches one process",
             run::run_matches_one_process as fn() -> Result<(), String>,
+        ),
+        (
+            "bodies under mpirun match one process bit for bit, and restart",
+            run::bodies_match_one_process_bit_for_bit,
         ),
         (
             "a killed process, then --restart, is bit-identical",
