@@ -107,6 +107,7 @@ pub struct NoSlip {
     /// markers and solves the same system), a flat buffer for those sums, and the curl's halo.
     split: Option<Arc<Comm>>,
     flat: Vec<f64>,
+    flat_scratch: Vec<f64>,
     curl_halo: CurlHalo,
 }
 
@@ -205,6 +206,8 @@ impl NoSlip {
         if self.split.is_some() {
             self.flat
                 .reserve((9 * total).saturating_sub(self.flat.len()));
+            self.flat_scratch
+                .reserve((9 * total).saturating_sub(self.flat_scratch.len()));
         }
         self.bodies.reserve(self.last.len());
     }
@@ -212,14 +215,15 @@ impl NoSlip {
 
 /// Interpolates `field` at every marker of `nodes` into `out`: the kernel's plane sums
 /// (`Stencil::interpolate_planes`, through the flat buffer `flat`), added over the processes
-/// when split (each plane's are one process's: exact) and then in plane order, so every
+/// when split (each plane's are one process's: exact, `Comm::sum_disjoint`) and then in plane
+/// order, so every
 /// process gets the values one process would, bit for bit.
 fn interpolate_all(
     grid: &Grid,
     nodes: &[(Stencil, DVec3)],
     field: &[Vec<f64>],
     split: Option<&Comm>,
-    flat: &mut Vec<f64>,
+    (flat, scratch): (&mut Vec<f64>, &mut Vec<f64>),
     out: &mut [DVec3],
 ) {
     let Some(c) = split else {
@@ -234,7 +238,8 @@ fn interpolate_all(
             flat.extend_from_slice(&p.to_array());
         }
     }
-    c.sum(flat);
+    scratch.resize(flat.len(), 0.0);
+    c.sum_disjoint(flat, scratch);
     for (o, f) in out.iter_mut().zip(flat.chunks_exact(9)) {
         let p = |k: usize| DVec3::new(f[3 * k], f[3 * k + 1], f[3 * k + 2]);
         *o = p(0) + p(1) + p(2);
@@ -350,7 +355,7 @@ pub fn noslip(
         &ns.nodes,
         &fields.u,
         split.as_deref(),
-        &mut ns.flat,
+        (&mut ns.flat, &mut ns.flat_scratch),
         &mut ns.r,
     );
     for (r, x) in ns.r.iter_mut().zip(ns.x.iter_mut()) {
@@ -553,7 +558,7 @@ fn apply(ns: &mut NoSlip, grid: &Grid, spectral: &mut Spectral, nu_dt: f64, dv: 
         &ns.nodes,
         &ns.kp_grid,
         ns.split.as_deref(),
-        &mut ns.flat,
+        (&mut ns.flat, &mut ns.flat_scratch),
         &mut ns.ap,
     );
     for rec in ns.bodies.iter_mut() {

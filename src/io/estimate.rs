@@ -365,11 +365,7 @@ pub fn split_estimate(scene: &ValidScene, processes: usize) -> SplitEstimate {
     let nxh = (g.n[0] / 2 + 1) as f64;
     let half_spectrum = 16.0 * nxh * (local / g.n[0] as f64);
     let transposed_bytes = (1.0 - kept) * (9.0 * half_spectrum + 7.0 * 8.0 * local);
-    let refused = if !scene.bodies.is_empty() || scene.free_surface.is_some() {
-        Some("bodies and free surfaces run on one process so far".to_string())
-    } else {
-        slabs.err().map(|e| e.to_string())
-    };
+    let refused = crate::sim::engine::unsplittable(scene).or(slabs.err().map(|e| e.to_string()));
     SplitEstimate {
         processes,
         planes,

@@ -142,6 +142,27 @@ impl Comm {
         self.reduce(v, |a, b| a + b);
     }
 
+    /// Replaces every entry of `v` by its sum over the ranks when each entry is non-zero on at
+    /// most one rank (the partial sums of planes each rank holds whole): every order of that
+    /// sum is exact, so one `MPI_Allreduce` gives every rank the same bits, receiving `v.len()`
+    /// values (not `v.len()` per rank as [`Comm::sum`] does). `scratch` is as long as `v`.
+    pub fn sum_disjoint(&self, v: &mut [f64], scratch: &mut [f64]) {
+        match &self.inner {
+            Inner::Solo => {
+                let _ = (v, scratch);
+            }
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::collective::{CommunicatorCollectives, SystemOperation};
+                let scratch = &mut scratch[..v.len()];
+                scratch.copy_from_slice(v);
+                let t0 = std::time::Instant::now();
+                c.all_reduce_into(&*scratch, v, SystemOperation::sum());
+                self.count_time(t0);
+            }
+        }
+    }
+
     /// Replaces every entry of `v` by its maximum over the ranks.
     pub fn max(&self, v: &mut [f64]) {
         self.reduce(v, f64::max);

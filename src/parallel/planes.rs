@@ -17,6 +17,8 @@ use crate::parallel::Comm;
 pub struct PlaneSums {
     width: usize,
     buf: Vec<f64>,
+    /// The reduction's send buffer (several processes).
+    scratch: Vec<f64>,
 }
 
 impl PlaneSums {
@@ -25,6 +27,7 @@ impl PlaneSums {
         PlaneSums {
             width,
             buf: vec![0.0; planes * width],
+            scratch: vec![0.0; planes * width],
         }
     }
 
@@ -60,7 +63,7 @@ impl PlaneSums {
         let w = self.width;
         let all = &mut self.buf[..planes * w];
         if let Some(c) = comm {
-            c.sum(all);
+            c.sum_disjoint(all, &mut self.scratch);
         }
         out.fill(0.0);
         for p in all.chunks_exact(w) {

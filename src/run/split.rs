@@ -8,18 +8,18 @@
 //! reads as the whole snapshot, `fields.xmf` and `series.h5`
 //! ([`crate::io::snapshots::SplitHdf5`]).
 //!
-//! The clock is the one-process run's: the same output times, landed on the same way, so the
-//! time series are the one-process run's to round-off (the sums over the grid are added in a
-//! different order). Every decision that could differ between processes (a wall-clock
+//! The clock is the one-process run's: the same output times, landed on the same way, and every
+//! sum over the grid is taken per z-plane and then plane after plane
+//! ([`crate::parallel::PlaneSums`]), so the outputs are the one-process run's bit for bit. Every decision that could differ between processes (a wall-clock
 //! checkpoint, an interruption) is taken together. A restart (`mpirun -np N tumble run
 //! --restart DIR`) needs the same number of processes and continues bit for bit.
 //!
 //! The bodies are held whole by every process (their sums over the grid are added over the
-//! processes), so rank 0 writes `bodies.csv` and `contacts.csv` from its own copy, and with HDF5
+//! processes, bit for bit the same on each), so rank 0 writes `bodies.csv` and `contacts.csv` from its own copy, and with HDF5
 //! output their series in `series.h5`.
 //!
 //! Not yet on several processes: free surfaces (refused before anything is written, with the
-//! reason).
+//! reason) and the body surfaces' output (not written).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -65,24 +65,34 @@ impl SimulationBuilder {
     }
 }
 
-/// The decomposition of `scene`'s grid over the processes of `comm`, or why it cannot run
-/// split (so far: a 3D flow, with or without bodies under the pressure coupling, without a
-/// free surface).
-pub fn split_scene(scene: &ValidScene, comm: Arc<Comm>) -> anyhow::Result<Decomposition> {
-    let ranks = comm.size();
+/// Why `scene` cannot run on several processes, if it cannot (so far: a free surface, or
+/// bodies under another coupling than the default `Pressure`); the grid's split is checked
+/// apart ([`Decomposition::new`]).
+pub fn unsplittable(scene: &ValidScene) -> Option<String> {
     if scene.free_surface.is_some() {
-        anyhow::bail!(
+        return Some(
             "this scene has a free surface: on several processes tumble runs flows without one \
              so far (run it on one process, without mpirun, or with -np 1)"
+                .into(),
         );
     }
     let coupling = scene.resolved().params.numerics.body_coupling;
     if !scene.bodies.is_empty() && coupling != crate::base::params::BodyCoupling::Pressure {
-        anyhow::bail!(
+        return Some(format!(
             "this scene couples its bodies by `{coupling:?}`: on several processes tumble runs \
              bodies under the default `Pressure` coupling only (run it on one process, without \
              mpirun, or with -np 1)"
-        );
+        ));
+    }
+    None
+}
+
+/// The decomposition of `scene`'s grid over the processes of `comm`, or why it cannot run
+/// split ([`unsplittable`], or a grid that does not split that many ways).
+pub fn split_scene(scene: &ValidScene, comm: Arc<Comm>) -> anyhow::Result<Decomposition> {
+    let ranks = comm.size();
+    if let Some(why) = unsplittable(scene) {
+        anyhow::bail!("{why}");
     }
     Decomposition::new(&scene.grid(), comm)
         .map_err(|e| anyhow::anyhow!("cannot split the grid over {ranks} processes: {e}"))
