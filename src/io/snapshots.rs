@@ -122,28 +122,7 @@ impl Snapshots {
         } else {
             None
         };
-        // The body surfaces kept: each snapshot's time read back from its file.
-        let surfaces = match surface_series(dir, sim) {
-            Some(series) => {
-                let mut entries = Vec::with_capacity(count);
-                for k in 0..count {
-                    let file = format!("bodies_{k:06}.vtp");
-                    let time = vtp_time(&dir.join(&file)).map_err(|e| {
-                        format!("{e}: the run directory does not match the checkpoint")
-                    })?;
-                    if time > sim.time() {
-                        return Err(format!(
-                            "{} is a snapshot at t = {time}, after the checkpoint: the run \
-                             directory does not match the checkpoint",
-                            dir.join(&file).display()
-                        ));
-                    }
-                    entries.push((time, file));
-                }
-                Some(series.with_entries(entries))
-            }
-            None => None,
-        };
+        let surfaces = resume_surfaces(dir, sim, count)?;
         #[cfg(feature = "hdf5")]
         let hdf5 = if sim.scene().output.has_format(OutputFormat::Hdf5) {
             Some(Hdf5Outputs::resume(dir, sim, count, has_surfaces(sim))?)
@@ -298,6 +277,49 @@ impl Snapshots {
         }
         Ok(())
     }
+}
+
+/// The surfaces series of `sim`'s run in `dir` at a checkpoint after `count` snapshots (none
+/// without bodies or free surface): the body surfaces kept, each snapshot's time read back
+/// from its file. Nothing is written; an error says why the run directory does not match.
+pub fn resume_surfaces(
+    dir: &Path,
+    sim: &Simulation,
+    count: usize,
+) -> Result<Option<SurfaceSeries>, String> {
+    let Some(series) = surface_series(dir, sim) else {
+        return Ok(None);
+    };
+    let mut entries = Vec::with_capacity(count);
+    for k in 0..count {
+        let file = format!("bodies_{k:06}.vtp");
+        let time = vtp_time(&dir.join(&file))
+            .map_err(|e| format!("{e}: the run directory does not match the checkpoint"))?;
+        if time > sim.time() {
+            return Err(format!(
+                "{} is a snapshot at t = {time}, after the checkpoint: the run directory does \
+                 not match the checkpoint",
+                dir.join(&file).display()
+            ));
+        }
+        entries.push((time, file));
+    }
+    Ok(Some(series.with_entries(entries)))
+}
+
+/// The body surfaces' series of a split run, which rank 0 writes (the bodies are whole on
+/// every process): `bodies_NNNNNN.vtp` indexed by `bodies.pvd`, as on one process.
+pub fn split_surfaces(dir: &Path, sim: &Simulation) -> Option<SurfaceSeries> {
+    surface_series(dir, sim)
+}
+
+/// Writes snapshot `index` of the body surfaces of a split run (rank 0); returns the file.
+pub fn write_split_surfaces(
+    series: &mut SurfaceSeries,
+    index: usize,
+    sim: &Simulation,
+) -> anyhow::Result<String> {
+    write_surfaces(series, index, sim).map(|(file, _)| file)
 }
 
 /// Snapshot `index` of the bodies' surfaces, each at its pose with its velocity, angular

@@ -18,8 +18,10 @@
 //! processes, bit for bit the same on each), so rank 0 writes `bodies.csv` and `contacts.csv` from its own copy, and with HDF5
 //! output their series in `series.h5`.
 //!
+//! Rank 0 also writes the body surfaces (`bodies_NNNNNN.vtp`, `bodies.pvd`).
+//!
 //! Not yet on several processes: free surfaces (refused before anything is written, with the
-//! reason) and the body surfaces' output (not written).
+//! reason) and the body surfaces' HDF5 form (not written).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -35,6 +37,7 @@ use crate::io::checkpoint::{self, Checkpoint, RunProgress};
 use crate::io::output::{PvdSeries, atomic_write};
 use crate::io::runlog::RunLog;
 use crate::io::snapshots::SplitHdf5;
+use crate::io::surfaces::SurfaceSeries;
 use crate::parallel::Comm;
 use crate::scene::{OutputFormat, ValidScene};
 use crate::sim::engine::Simulation;
@@ -53,6 +56,8 @@ struct Outputs {
     vtk: bool,
     /// HDF5 snapshots and `series.h5` (a scene asking for them).
     hdf5: Option<SplitHdf5>,
+    /// The body surfaces, `bodies_NNNNNN.vtp` and `bodies.pvd` (rank 0, a scene with bodies).
+    surfaces: Option<SurfaceSeries>,
     /// Snapshots written.
     count: usize,
     next_out: Option<f64>,
@@ -119,6 +124,11 @@ pub fn run_split(
         pvd: (root && vtk(&sim)).then(|| PvdSeries::new(dir.join("fields.pvd"))),
         vtk: vtk(&sim),
         hdf5: SplitHdf5::new(&dir, &sim, root),
+        surfaces: if root {
+            crate::io::snapshots::split_surfaces(&dir, &sim)
+        } else {
+            None
+        },
         count: 0,
         next_out: every.map(|e| e.min(end)),
         next_ckpt: scene.output.checkpoint_every,
@@ -172,7 +182,12 @@ pub fn restart_split(
     let mut hdf5 = agree(&comm, resumed, "read the run's HDF5 files back")?;
     let mut log = None;
     // Rank 0's files cut back to the checkpoint; every process drops its later checkpoints.
-    type Csvs = (SeriesCsv, Option<BodiesCsv>, Option<ContactsCsv>);
+    type Csvs = (
+        SeriesCsv,
+        Option<BodiesCsv>,
+        Option<ContactsCsv>,
+        Option<SurfaceSeries>,
+    );
     let cut: anyhow::Result<Option<Csvs>> = (|| {
         for (s, _) in checkpoint::list(&dir)?
             .into_iter()
@@ -206,6 +221,19 @@ pub fn restart_split(
             return Ok(None);
         }
         log = Some(RunLog::append(&dir.join("log.txt"))?);
+        // The body surfaces after the checkpoint go too; those kept are read back.
+        for k in p.snapshots as usize.. {
+            let f = dir.join(format!("bodies_{k:06}.vtp"));
+            if !f.is_file() {
+                break;
+            }
+            std::fs::remove_file(&f).with_context(|| format!("cannot remove {}", f.display()))?;
+        }
+        let surfaces = crate::io::snapshots::resume_surfaces(&dir, &sim, p.snapshots as usize)
+            .map_err(|m| anyhow::Error::from(ck0.error(m)))?;
+        if let Some(s) = &surfaces {
+            s.pvd().write().context("cannot write bodies.pvd")?;
+        }
         let csvs = [
             ("series.csv", Some(p.series_len)),
             ("bodies.csv", p.bodies_len),
@@ -231,14 +259,15 @@ pub fn restart_split(
             SeriesCsv::append(&dir.join("series.csv"), &sim)?,
             bodies,
             contacts,
+            surfaces,
         )))
     })();
     // Every process has listed the later checkpoints before any is removed.
     comm.barrier();
     let csvs = agree(&comm, cut, "cut the run's files back to the checkpoint")?;
-    let (series, bodies, contacts) = match csvs {
-        Some((s, b, c)) => (Some(s), b, c),
-        None => (None, None, None),
+    let (series, bodies, contacts, surfaces) = match csvs {
+        Some((s, b, c, f)) => (Some(s), b, c, f),
+        None => (None, None, None, None),
     };
     if root {
         log_start(&sim, &comm, &dir, &format!("restart from step {step}"));
@@ -253,6 +282,7 @@ pub fn restart_split(
             .then(|| PvdSeries::with_entries(dir.join("fields.pvd"), p.pvd.clone())),
         vtk: vtk(&sim),
         hdf5,
+        surfaces,
         count: p.snapshots as usize,
         next_out: p.next_out,
         next_ckpt: scene
@@ -364,7 +394,10 @@ impl Outputs {
         if let Some(h) = self.hdf5.as_mut() {
             h.snapshot(&self.dir, self.count, sim)?;
         }
-        if self.vtk || self.hdf5.is_some() {
+        if let Some(s) = self.surfaces.as_mut() {
+            crate::io::snapshots::write_split_surfaces(s, self.count, sim)?;
+        }
+        if self.vtk || self.hdf5.is_some() || self.surfaces.is_some() {
             self.count += 1;
         }
         Ok(())

@@ -113,14 +113,21 @@ fn same_files(dir: &Path, a: &str, b: &str, names: &[&str]) -> Result<(), String
 }
 
 /// Bodies on one process and under `mpirun -np 2` and `-np 3`: every sum over the grid is
-/// taken plane by plane in the same order whatever the split, so `series.csv`, `bodies.csv`
-/// and `contacts.csv` are the one-process run's byte for byte and the snapshots' arrays
+/// taken plane by plane in the same order whatever the split, so `series.csv`, `bodies.csv`,
+/// `contacts.csv` and the body surfaces (rank 0's) are the one-process run's byte for byte and the snapshots' arrays
 /// (vorticity, velocity, density, χ, φ) bit for bit. Then the two-process run restarted from
 /// its first checkpoint ends with the same files.
 pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
     let dir = scratch("bodies", "bodies.ron", BODIES_SCENE)?;
     run_in(&dir, "bodies.ron", 1, "one")?;
-    let csvs = ["series.csv", "bodies.csv", "contacts.csv"];
+    let csvs = [
+        "series.csv",
+        "bodies.csv",
+        "contacts.csv",
+        "bodies.pvd",
+        "bodies_000000.vtp",
+        "bodies_000002.vtp",
+    ];
     let contacts = std::fs::read_to_string(dir.join("one/contacts.csv"))
         .map_err(|e| format!("one/contacts.csv: {e}"))?;
     if contacts.lines().count() < 10 {
