@@ -146,14 +146,17 @@ pub fn status(
     if let Some(code) = set_threads(cli.threads) {
         return code;
     }
-    // Under mpirun only `run` and `bench` split their work; every other command would run
-    // once per process, writing the same files.
-    if !matches!(cli.command, Command::Run { .. } | Command::Bench { .. })
+    // Under mpirun only `run`, `bench` and `validate` split their work; every other command
+    // would run once per process, writing the same files.
+    if !matches!(
+        cli.command,
+        Command::Run { .. } | Command::Bench { .. } | Command::Validate { .. }
+    )
         && let Some(n) = crate::parallel::comm::launcher_size().filter(|&n| n > 1)
     {
         eprintln!(
-            "error: started by mpirun on {n} processes: only `tumble run` and `tumble bench` run \
-             on several processes (run this command without mpirun)"
+            "error: started by mpirun on {n} processes: only `tumble run`, `tumble bench` and \
+             `tumble validate` run on several processes (run this command without mpirun)"
         );
         return 2;
     }
@@ -195,7 +198,24 @@ pub fn status(
             list,
             write_docs,
             plots,
-        } => validate::validate(&cases, quick, list, write_docs.as_deref(), &plots),
+        } => {
+            // Under mpirun, the processes the cases split over (kept until they end).
+            let procs = match crate::parallel::comm::launched() {
+                Ok(p) => p,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    return 2;
+                }
+            };
+            validate::validate(
+                &cases,
+                quick,
+                list,
+                write_docs.as_deref(),
+                &plots,
+                procs.as_ref().map(|p| p.comm.clone()),
+            )
+        }
         Command::Bench {
             scene,
             steps,

@@ -6,16 +6,48 @@ use std::path::Path;
 
 /// `tumble validate [CASES..] [--quick] [--list] [--write-docs FILE] [--plots DIR]`: exit
 /// status 1 if a case fails.
+///
+/// Under `mpirun` (`comm` of several processes) every process runs the cases, each case's
+/// simulations split over the processes where their scenes split
+/// ([`crate::validate::builder`]); rank 0 alone prints and writes.
 pub fn validate(
     cases: &[String],
     quick: bool,
     list: bool,
     write_docs: Option<&Path>,
     plots: &Path,
+    comm: Option<std::sync::Arc<crate::parallel::Comm>>,
 ) -> u8 {
+    match comm.filter(|c| c.size() > 1) {
+        Some(c) => {
+            let root = c.is_root();
+            crate::validate::on_processes(c, || {
+                validate_on(cases, quick, list, write_docs, plots, root)
+            })
+        }
+        None => validate_on(cases, quick, list, write_docs, plots, true),
+    }
+}
+
+/// [`validate`] on this process; only `root` prints and writes files.
+fn validate_on(
+    cases: &[String],
+    quick: bool,
+    list: bool,
+    write_docs: Option<&Path>,
+    plots: &Path,
+    root: bool,
+) -> u8 {
+    macro_rules! say {
+        ($($t:tt)*) => {
+            if root {
+                println!($($t)*);
+            }
+        };
+    }
     if list {
         for c in CASES {
-            println!(
+            say!(
                 "{}: {}\n    reference: {}\n    full ({}): {}\n    quick ({}): {}",
                 c.name, c.description, c.reference, c.full_time, c.full, c.quick_time, c.quick
             );
@@ -27,7 +59,7 @@ pub fn validate(
         match find_case(name) {
             Some(c) => selected.push(c),
             None => {
-                println!(
+                say!(
                     "== {name}\n  error: unknown validation case `{name}`; the cases are: {}\nFAIL {name}",
                     CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
                 );
@@ -49,19 +81,21 @@ pub fn validate(
     let mut reports = Vec::new();
     for case in selected {
         let rep = case.run(quick);
-        println!("{rep}");
-        println!("  ({:.1} s)", rep.seconds);
-        write_validation_plots(&rep, plots);
+        say!("{rep}");
+        say!("  ({:.1} s)", rep.seconds);
+        if root {
+            write_validation_plots(&rep, plots);
+        }
         reports.push(rep);
     }
     let wall = start.elapsed().as_secs_f64();
     let failed = reports.iter().filter(|r| !r.passed()).count();
-    println!(
+    say!(
         "{} passed, {} failed ({wall:.1} s)",
         reports.len() - failed,
         failed
     );
-    if let Some(file) = write_docs {
+    if let Some(file) = write_docs.filter(|_| root) {
         let date = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| crate::validate::docs::utc_date(d.as_secs()))

@@ -206,6 +206,47 @@ pub fn bundled_scene(file: &str) -> anyhow::Result<ValidScene> {
     )?)
 }
 
+thread_local! {
+    /// The processes `tumble validate` runs on under `mpirun` ([`on_processes`]).
+    static PROCESSES: std::cell::RefCell<Option<std::sync::Arc<crate::parallel::Comm>>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` (cases) with their simulations split over the processes of `comm`
+/// ([`builder`]); every process runs the same cases and gets the same reports.
+pub fn on_processes<R>(comm: std::sync::Arc<crate::parallel::Comm>, f: impl FnOnce() -> R) -> R {
+    PROCESSES.with(|p| *p.borrow_mut() = Some(comm));
+    let r = f();
+    PROCESSES.with(|p| *p.borrow_mut() = None);
+    r
+}
+
+/// The builder of a case's simulation of `scene`: split over the processes of
+/// [`on_processes`] where the scene splits (a 3D scene without free surface, whose grid has
+/// planes enough), else whole on every process (the same run on each). A split run is the
+/// whole run bit for bit (README, "On several processes"), so the case's rows are the
+/// one-process rows.
+pub fn builder(scene: crate::scene::ValidScene) -> crate::sim::engine::SimulationBuilder {
+    let comm = PROCESSES.with(|p| p.borrow().clone());
+    let splits = |c: &std::sync::Arc<crate::parallel::Comm>| {
+        c.size() > 1
+            && scene.grid().dim == 3
+            && crate::sim::engine::unsplittable(&scene).is_none()
+            && crate::parallel::Slabs::new(scene.grid().n, c.size(), c.rank()).is_ok()
+    };
+    match comm.filter(splits) {
+        Some(c) => crate::sim::engine::Simulation::builder(scene).on_processes(c),
+        None => crate::sim::engine::Simulation::builder(scene),
+    }
+}
+
+/// [`builder`]`(scene).build()`: a case's simulation.
+pub fn simulation(
+    scene: crate::scene::ValidScene,
+) -> anyhow::Result<crate::sim::engine::Simulation> {
+    builder(scene).build()
+}
+
 /// Run one case by name (an error only for an unknown name; a case whose run fails gives a
 /// failed report).
 pub fn run_case(case: &str, quick: bool) -> anyhow::Result<Report> {

@@ -3,7 +3,6 @@
 
 use super::common::{MODEL, dynamic_body};
 use crate::scene::Scene;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -123,7 +122,7 @@ fn launch_run(
         )"#
         )
     };
-    let mut sim = Simulation::new(Scene::parse(&text, "added-mass", "added-mass")?)?;
+    let mut sim = crate::validate::simulation(Scene::parse(&text, "added-mass", "added-mass")?)?;
     let mut v = Vec::with_capacity(steps);
     for _ in 0..steps {
         sim.step()?;

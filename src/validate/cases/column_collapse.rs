@@ -307,7 +307,7 @@ fn run(ratio: f64, h: f64, geo: &Geometry) -> anyhow::Result<Run> {
         .map(|g| g * g)
         .sum::<f64>()
         .sqrt();
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let mut samples = vec![(0.0, sample(&sim, geo, 1.0 / ratio)?)];
     let mut drift = 0.0f64;
     let mut error = None;

@@ -52,7 +52,7 @@ pub fn cup(quick: bool) -> anyhow::Result<Report> {
     let z0 = scene.bodies[1].position[2];
     let floor = 0.5 - 0.47;
     let limit = 5.0 * (2.0 * g * (z0 - floor)).sqrt();
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     sim.set_stop_at(Some(end));
     let cup_state = |sim: &mut Simulation| {
         crate::io::checkpoint::body_states(sim)

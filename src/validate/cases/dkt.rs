@@ -1,7 +1,6 @@
 //! `dkt`: the paper's section 4.2.2: drafting, kissing and tumbling of two spheres.
 
 use super::common::dynamic_states;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, PlotSpec, Report, Row, RunTime, bundled_scene};
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -42,7 +41,7 @@ fn dkt_run(end: f64, c_scale: f64) -> anyhow::Result<Dkt> {
         }
     })?;
     let h = scene.grid().h;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     sim.set_stop_at(Some(end));
     let mut run = Dkt {
         h,

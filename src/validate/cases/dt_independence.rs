@@ -2,7 +2,6 @@
 //! time step (issue 16).
 
 use super::common::{dynamic_body, tube_scene};
-use crate::sim::engine::Simulation;
 use crate::validate::PlotSpec;
 use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
 
@@ -51,7 +50,7 @@ fn table1_run(h: f64, scale: f64, land: &[f64]) -> anyhow::Result<Vec<(f64, f64)
             diffusion_number: 0.5 * scale,
         }
     })?;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let mut curve = Vec::new();
     for &t_stop in land.iter().chain([1.2].iter()) {
         sim.set_stop_at(Some(t_stop));

@@ -3,7 +3,6 @@
 
 use super::common::{dynamic_states, energy, energy_plot, leapfrog_mid};
 use crate::bodies::RigidState;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, Report, Row, RunTime, bundled_scene};
 use glam::DVec3;
 
@@ -29,7 +28,7 @@ pub fn ellipsoid_sphere(quick: bool) -> anyhow::Result<Report> {
     let g = DVec3::from_array(scene.gravity());
     let floor = DVec3::new(0.0, 0.0, scene.bodies[0].position[2]);
     let end = scene.numerics.end_time;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     // The χ volume and inertia are integrated in the first step: E0 is taken after it.
     sim.set_stop_at(Some(end));
     let mut e0 = None;

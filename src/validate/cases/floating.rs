@@ -349,7 +349,7 @@ fn run(rep: &mut Report, h: f64, r: f64) -> anyhow::Result<()> {
         hy = 0.5 * TOP,
     );
     let scene = Scene::parse(&text, "floating", "floating")?;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let mut sums = [0.0; 6];
     let mut count = 0usize;
     // Columns between the bodies where the waterline is read.

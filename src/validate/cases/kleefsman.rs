@@ -786,7 +786,7 @@ impl Run {
 /// The dam break at grid step `h`, sampled every [`SAMPLE`] to [`END`] or its blow-up.
 fn run(h: f64) -> anyhow::Result<Run> {
     let start = std::time::Instant::now();
-    let mut sim = Simulation::new(scene(h)?)?;
+    let mut sim = crate::validate::simulation(scene(h)?)?;
     let cells = [0, 1, 2].map(|a| (TANK[a] / h).round() as usize);
     let points = SENSORS.map(|(_, z, _)| [FACE_X, SENSOR_Y, z]);
     let mut heights: [Vec<f64>; 4] = Default::default();

@@ -36,7 +36,7 @@ fn lamb_oseen(quick: bool) -> anyhow::Result<Report> {
     };
     let nu = scene.fluid.viscosity;
     let t_end = s0 * s0 / (4.0 * nu);
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let peak_of = |s: &Simulation| {
         s.fields().omega()[0]
             .iter()

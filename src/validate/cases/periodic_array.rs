@@ -31,7 +31,6 @@
 
 use super::common::{MODEL, dynamic_states};
 use crate::scene::Scene;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
 use std::f64::consts::PI;
 
@@ -99,7 +98,7 @@ fn settle(
         -g,
         bodies.join(", "),
     );
-    let mut sim = Simulation::new(Scene::parse(&text, "periodic-array", "periodic-array")?)?;
+    let mut sim = crate::validate::simulation(Scene::parse(&text, "periodic-array", "periodic-array")?)?;
     sim.set_stop_at(None);
     let (mut travelled, mut curve, mut crossings, mut spread) = (0.0, Vec::new(), 0, 0.0f64);
     let mut z = 0.5 * side;

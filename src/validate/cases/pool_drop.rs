@@ -328,7 +328,7 @@ fn drop_at(rep: &mut Report, cells: usize) -> anyhow::Result<()> {
     let end = scene.numerics.end_time;
     let label = format!("{cells}^3, 1:{ratio:.0}");
     let limit = 10.0 * (2.0 * g * (geo.hi - geo.lo)).sqrt();
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     sim.set_stop_at(Some(end));
     let h = sim.grid().h;
     let r = geo.radius;

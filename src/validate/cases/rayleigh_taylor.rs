@@ -45,7 +45,7 @@ pub fn rayleigh_taylor(quick: bool) -> anyhow::Result<Report> {
             4.0,
             "",
         )?;
-        let mut sim = Simulation::new(scene)?;
+        let mut sim = crate::validate::simulation(scene)?;
         let half = sim.grid().n[0] / 2;
         let amp = |sim: &Simulation| {
             0.5 * (surface_height(sim, 0, 1.0) - surface_height(sim, half, 1.0)).abs()

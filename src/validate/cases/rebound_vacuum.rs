@@ -2,7 +2,6 @@
 //! height.
 
 use super::common::dynamic_states;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, PlotSpec, Report, Row, RunTime, bundled_scene};
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -28,7 +27,7 @@ pub fn rebound_vacuum(quick: bool) -> anyhow::Result<Report> {
     let y0 = scene.bodies[1].position[1];
     let eps = scene.resolved().contact.eps;
     let end = scene.numerics.end_time;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let mut ys = vec![(sim.time(), y0)];
     sim.set_stop_at(Some(end));
     while sim.time() < end * (1.0 - 1e-12) {

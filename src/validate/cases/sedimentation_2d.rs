@@ -2,7 +2,6 @@
 //! contact.
 
 use super::common::dynamic_body;
-use crate::sim::engine::Simulation;
 use crate::validate::PlotSpec;
 use crate::validate::bundled_scene;
 use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
@@ -76,7 +75,7 @@ fn sedimentation_run(h: f64, dt: f64, kappa: f64) -> anyhow::Result<Sedimentatio
         scene.contact.kappa = Some(kappa);
     })?;
     let r = 0.125;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let mut out = Sedimentation {
         vmax: 0.0,
         ymin: f64::INFINITY,

@@ -2,7 +2,6 @@
 //! in a tube.
 
 use super::common::{dynamic_body, tube_scene};
-use crate::sim::engine::Simulation;
 use crate::validate::PlotSpec;
 use crate::validate::{Case, Report, Row, RunTime};
 
@@ -81,7 +80,7 @@ fn settling_run_dt(
             *dt_max = None;
         }
     })?;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let mut curve = Vec::new();
     sim.set_stop_at(Some(1.2));
     while sim.time() < 1.2 * (1.0 - 1e-12) {

@@ -2,7 +2,6 @@
 //! 2D tank closed by a floor and a lid, periodic along x).
 
 use super::common::{RATIOS, surface_height, tank};
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, KnownFailure, PlotSpec, Report, Row, RunTime};
 use std::f64::consts::PI;
 
@@ -73,7 +72,7 @@ pub fn standing_wave(quick: bool) -> anyhow::Result<Report> {
             end,
             "",
         )?;
-        let mut sim = Simulation::new(scene)?;
+        let mut sim = crate::validate::simulation(scene)?;
         let half = sim.grid().n[0] / 2;
         let mut series = vec![(0.0, 2.0 * a0)];
         while sim.time() < end - 1e-12 {

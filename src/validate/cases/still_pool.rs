@@ -3,7 +3,6 @@
 
 use super::common::{RATIOS, tank};
 use crate::bodies::free_surface::LiquidLevelSet;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, Report, Row, RunTime};
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -37,7 +36,7 @@ pub fn still_pool(quick: bool) -> anyhow::Result<Report> {
             1e9,
             "",
         )?;
-        let mut sim = Simulation::new(scene)?;
+        let mut sim = crate::validate::simulation(scene)?;
         let mut umax = 0.0f64;
         let mut drift = 0.0f64;
         for _ in 0..1000 {

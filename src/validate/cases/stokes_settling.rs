@@ -3,7 +3,6 @@
 
 use super::common::{MODEL, dynamic_body};
 use crate::scene::Scene;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, KnownFailure, Report, Row, RunTime};
 use std::f64::consts::PI;
 
@@ -55,7 +54,7 @@ fn periodic_settling(
         -g,
         2.0 * t_end
     );
-    let mut sim = Simulation::new(Scene::parse(&text, "stokes-settling", "stokes-settling")?)?;
+    let mut sim = crate::validate::simulation(Scene::parse(&text, "stokes-settling", "stokes-settling")?)?;
     // No landing on t_end: every step is the policy's own.
     sim.set_stop_at(None);
     let sign = if rho > 1.0 { -1.0 } else { 1.0 };

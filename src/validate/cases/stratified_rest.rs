@@ -2,7 +2,6 @@
 
 use crate::base::grid::Grid;
 use crate::scene::Scene;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, Report, Row, RunTime};
 
 /// The case: what it checks, against what, and the rows known to fail.
@@ -84,7 +83,7 @@ fn stratified_rest(quick: bool) -> anyhow::Result<Report> {
             )
         };
         let scene = Scene::parse(&text, "stratified-rest", "stratified-rest")?;
-        let mut sim = Simulation::builder(scene).add_plugin(TwoLayers).build()?;
+        let mut sim = crate::validate::builder(scene).add_plugin(TwoLayers).build()?;
         let mut umax = 0.0f64;
         for _ in 0..1000 {
             sim.step()?;
@@ -97,6 +96,10 @@ fn stratified_rest(quick: bool) -> anyhow::Result<Report> {
             .rho
             .iter()
             .fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
+        // Over every process's slab when split.
+        let split = sim.world.get_resource::<crate::parallel::Decomposition>();
+        let global_max = |x: f64| crate::parallel::global_max(split, x);
+        let (umax, lo, hi) = (global_max(umax), -global_max(-lo), global_max(hi));
         rep.rows.push(Row::yes_no(
             format!("{dim}D {n} cells per side: the density field holds both layers (1 and 10)"),
             lo == 1.0 && hi == 10.0,

@@ -1,7 +1,6 @@
 //! `tank-pile`: the spheres of `tank-200` dropped into a closed box of fluid settle into a pile.
 
 use super::common::{dynamic_states, smallest_sphere_gap, tank_geometry};
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, PlotSpec, Report, Row, RunTime, bundled_scene};
 use glam::DVec3;
 
@@ -43,7 +42,7 @@ pub fn tank_pile(quick: bool) -> anyhow::Result<Report> {
     let u_stokes = 2.0 / 9.0 * (rho_s / rho_f - 1.0) * g * r * r / nu;
     let n = scene.bodies.len() - 1;
     let end = scene.numerics.end_time;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     sim.set_stop_at(Some(end));
     let mut worst = f64::INFINITY;
     let mut vmax_curve = Vec::new();

@@ -5,7 +5,6 @@ use super::common::{
     dynamic_states, energy, energy_plot, leapfrog_mid, smallest_sphere_gap, tank_geometry,
 };
 use crate::bodies::RigidState;
-use crate::sim::engine::Simulation;
 use crate::validate::{Case, Report, Row, RunTime, bundled_scene};
 use glam::DVec3;
 
@@ -39,7 +38,7 @@ pub fn tank_vacuum(quick: bool) -> anyhow::Result<Report> {
     let (lo, hi, r) = tank_geometry(&scene)?;
     let n = scene.bodies.len() - 1;
     let end = scene.numerics.end_time;
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     sim.set_stop_at(Some(end));
     let mut prev: Option<Vec<RigidState>> = None;
     let mut e0 = None;

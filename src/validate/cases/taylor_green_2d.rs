@@ -1,7 +1,6 @@
 //! `taylor-green-2d`: the 2D Taylor-Green vortex: kinetic energy against exp(-2νk²t) over one decay
 //! time.
 
-use crate::sim::engine::Simulation;
 use crate::validate::PlotSpec;
 use crate::validate::bundled_scene;
 use crate::validate::{Case, Report, Row, RunTime};
@@ -31,7 +30,7 @@ fn taylor_green_2d(quick: bool) -> anyhow::Result<Report> {
     };
     let nu = scene.fluid.viscosity;
     let t_end = 1.0 / (2.0 * nu * 2.0 * k * k);
-    let mut sim = Simulation::new(scene)?;
+    let mut sim = crate::validate::simulation(scene)?;
     let e0 = sim.sample().energy;
     let mut worst = (0.0f64, 0.0f64, 0.0f64);
     let mut curve = vec![(sim.time(), 1.0)];

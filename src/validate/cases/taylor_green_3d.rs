@@ -1,7 +1,6 @@
 //! `taylor-green-3d`: the 3D Taylor-Green vortex at Re = 1600: kinetic energy at t = 5 against the
 //! spectral reference.
 
-use crate::sim::engine::Simulation;
 use crate::validate::PlotSpec;
 use crate::validate::bundled_scene;
 use crate::validate::{Case, Report, Row, RunTime};
@@ -32,7 +31,7 @@ fn taylor_green_3d(quick: bool) -> anyhow::Result<Report> {
     for &n in sizes {
         let scene =
             bundled_scene("taylor-green-3d.ron")?.edit(|s| s.domain.cells = Some(vec![n, n, n]))?;
-        let mut sim = Simulation::new(scene)?;
+        let mut sim = crate::validate::simulation(scene)?;
         let e0 = sim.sample().energy;
         let start = std::time::Instant::now();
         let mut curve = vec![(sim.time(), e0)];
