@@ -151,8 +151,7 @@ pub fn status(
     if !matches!(
         cli.command,
         Command::Run { .. } | Command::Bench { .. } | Command::Validate { .. }
-    )
-        && let Some(n) = crate::parallel::comm::launcher_size().filter(|&n| n > 1)
+    ) && let Some(n) = crate::parallel::comm::launcher_size().filter(|&n| n > 1)
     {
         eprintln!(
             "error: started by mpirun on {n} processes: only `tumble run`, `tumble bench` and \

@@ -49,7 +49,13 @@ fn validate_on(
         for c in CASES {
             say!(
                 "{}: {}\n    reference: {}\n    full ({}): {}\n    quick ({}): {}",
-                c.name, c.description, c.reference, c.full_time, c.full, c.quick_time, c.quick
+                c.name,
+                c.description,
+                c.reference,
+                c.full_time,
+                c.full,
+                c.quick_time,
+                c.quick
             );
         }
         return 0;

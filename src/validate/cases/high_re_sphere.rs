@@ -142,7 +142,8 @@ fn scene(closed: bool, n: usize, scale: f64, end: f64) -> String {
 
 fn run(closed: bool, n: usize, scale: f64, end: f64) -> anyhow::Result<Trace> {
     let text = scene(closed, n, scale, end);
-    let mut sim = crate::validate::simulation(Scene::parse(&text, "high-re-sphere", "high-re-sphere")?)?;
+    let mut sim =
+        crate::validate::simulation(Scene::parse(&text, "high-re-sphere", "high-re-sphere")?)?;
     sim.set_stop_at(Some(end));
     let mut tr = Trace::default();
     while sim.time() < end - 1e-12 {

@@ -98,7 +98,8 @@ fn settle(
         -g,
         bodies.join(", "),
     );
-    let mut sim = crate::validate::simulation(Scene::parse(&text, "periodic-array", "periodic-array")?)?;
+    let mut sim =
+        crate::validate::simulation(Scene::parse(&text, "periodic-array", "periodic-array")?)?;
     sim.set_stop_at(None);
     let (mut travelled, mut curve, mut crossings, mut spread) = (0.0, Vec::new(), 0, 0.0f64);
     let mut z = 0.5 * side;

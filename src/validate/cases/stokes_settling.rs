@@ -54,7 +54,8 @@ fn periodic_settling(
         -g,
         2.0 * t_end
     );
-    let mut sim = crate::validate::simulation(Scene::parse(&text, "stokes-settling", "stokes-settling")?)?;
+    let mut sim =
+        crate::validate::simulation(Scene::parse(&text, "stokes-settling", "stokes-settling")?)?;
     // No landing on t_end: every step is the policy's own.
     sim.set_stop_at(None);
     let sign = if rho > 1.0 { -1.0 } else { 1.0 };

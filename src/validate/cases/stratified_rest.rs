@@ -83,7 +83,9 @@ fn stratified_rest(quick: bool) -> anyhow::Result<Report> {
             )
         };
         let scene = Scene::parse(&text, "stratified-rest", "stratified-rest")?;
-        let mut sim = crate::validate::builder(scene).add_plugin(TwoLayers).build()?;
+        let mut sim = crate::validate::builder(scene)
+            .add_plugin(TwoLayers)
+            .build()?;
         let mut umax = 0.0f64;
         for _ in 0..1000 {
             sim.step()?;
