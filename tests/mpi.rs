@@ -178,6 +178,10 @@ fn main() {
             run::bodies_match_one_process_bit_for_bit,
         ),
         (
+            "tumble validate under mpirun gives the one-process report",
+            run::validate_matches_one_process,
+        ),
+        (
             "a killed process, then --restart, is bit-identical",
             run::killed_and_restarted_is_bit_identical,
         ),

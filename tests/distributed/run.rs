@@ -169,6 +169,77 @@ pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
     Ok(())
 }
 
+/// `tumble validate` of two quick cases (Taylor-Green 3D, which splits, and a vacuum rebound)
+/// under `mpirun -np 2` and on one process: the same report, line for line, but for the wall
+/// times and the plots' directory.
+pub fn validate_matches_one_process() -> Result<(), String> {
+    let tumble = env!("CARGO_BIN_EXE_tumble");
+    let dir = scratch("validate", "none.txt", "")?;
+    let report = |np: usize| -> Result<Vec<String>, String> {
+        let mut cmd = if np > 1 {
+            let mut c = mpirun(np);
+            c.arg(tumble);
+            c
+        } else {
+            Command::new(tumble)
+        };
+        let plots = format!("plots{np}");
+        let out = cmd
+            .args(["validate", "taylor-green-3d", "rebound-vacuum", "--quick"])
+            .args(["--threads", "1", "--plots", &plots])
+            .current_dir(&dir)
+            .output()
+            .map_err(|e| e.to_string())?;
+        if !out.status.success() {
+            return Err(format!(
+                "{np} processes: tumble validate failed ({})",
+                out.status
+            ));
+        }
+        Ok(String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter(|l| !(l.trim_end().ends_with(" s)") || l.trim_start().starts_with("plot ")))
+            .map(without_seconds)
+            .collect())
+    };
+    let (one, two) = (report(1)?, report(2)?);
+    let _ = std::fs::remove_dir_all(&dir);
+    if one.len() < 4 || !one.iter().any(|l| l.starts_with("PASS taylor-green-3d")) {
+        return Err(format!(
+            "the one-process report is not the expected one: {one:?}"
+        ));
+    }
+    match one.iter().zip(&two).find(|(a, b)| a != b) {
+        Some((a, b)) => Err(format!("one process: `{a}`, two: `{b}`")),
+        None if one.len() != two.len() => Err(format!(
+            "{} lines on one process, {} on two",
+            one.len(),
+            two.len()
+        )),
+        None => Ok(()),
+    }
+}
+
+/// `line` with every number of seconds (a number followed by the word `s`) replaced by `#`:
+/// wall times differ between runs.
+fn without_seconds(line: &str) -> String {
+    let words: Vec<&str> = line.split(' ').collect();
+    let seconds = |w: &str| matches!(w, "s" | "s;" | "s," | "s)" | "s.");
+    words
+        .iter()
+        .enumerate()
+        .map(|(i, w)| {
+            let next_is_s = words.get(i + 1).is_some_and(|n| seconds(n));
+            if next_is_s && w.parse::<f64>().is_ok() {
+                "#"
+            } else {
+                w
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// A copy of directory `from` (files only) at `to`.
 fn copy_dir(from: &Path, to: &Path) -> Result<(), String> {
     std::fs::create_dir_all(to).map_err(|e| e.to_string())?;
