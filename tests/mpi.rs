@@ -94,6 +94,39 @@ fn split_spectral_allocates_nothing(comm: Arc<tumble::parallel::Comm>) -> f64 {
     comm.sum_one(ALLOCS.swap(0, Ordering::Relaxed) as f64)
 }
 
+/// A split step of a scene with bodies (level sets, contact, penalization, the pressure solve
+/// with its halos and plane sums, transport, the no-slip's markers) allocates nothing once the
+/// run is under way; returns the allocations counted on every process over two steps.
+fn split_body_step_allocates_nothing(comm: Arc<tumble::parallel::Comm>) -> f64 {
+    use tumble::scene::Scene;
+    use tumble::sim::engine::Simulation;
+    let scene = Scene::parse(checks::BODIES, "check.ron", "check").expect("scene parses");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
+    let mut sim = pool.install(|| {
+        Simulation::builder(scene)
+            .on_processes(comm.clone())
+            .build()
+            .expect("split simulation builds")
+    });
+    pool.install(|| {
+        for _ in 0..3 {
+            sim.step().expect("step");
+        }
+    });
+    comm.barrier();
+    pool.install(|| {
+        COUNTING.store(true, Ordering::Relaxed);
+        for _ in 0..2 {
+            sim.step().expect("step");
+        }
+        COUNTING.store(false, Ordering::Relaxed);
+    });
+    comm.sum_one(ALLOCS.swap(0, Ordering::Relaxed) as f64)
+}
+
 /// One check: its name and the largest error it measured with the tolerance it is held to.
 type Check = (&'static str, fn(Arc<tumble::parallel::Comm>) -> f64, f64);
 
@@ -121,6 +154,16 @@ const CHECKS: &[Check] = &[
     (
         "vortex_ring_matches_whole",
         |c| checks::simulation_matches_whole(c, checks::VORTEX_RING, 12),
+        0.0,
+    ),
+    (
+        "bodies_match_whole",
+        |c| checks::simulation_matches_whole(c, checks::BODIES, 12),
+        0.0,
+    ),
+    (
+        "split_body_step_allocates_nothing",
+        split_body_step_allocates_nothing,
         0.0,
     ),
     (

@@ -248,6 +248,22 @@ pub const VORTEX_RING: &str = r#"Scene(
         core_radius: 0.15, circulation: 1.0)],
 )"#;
 
+/// Two spheres and an ellipsoid falling in a closed channel (a static body), two of them
+/// touching within the first steps.
+pub const BODIES: &str = r#"Scene(
+    name: "bodies",
+    domain: (extent: [1.0, 1.0, 2.0], cells: [20, 20, 40]),
+    fluid: (density: 1.0, viscosity: 0.01, gravity: [0.0, 0.0, -980.0]),
+    numerics: (dt: Adaptive(c: 0.8, dt_max: 0.07), end_time: 1.0),
+    contact: (kappa: 25.0),
+    bodies: [
+        (name: "channel", shape: Complement(Box(half_extents: [0.425, 0.425, 0.925])), kind: Static, position: [0.5, 0.5, 1.0]),
+        (name: "upper", shape: Sphere(radius: 0.15), density: 1.5, position: [0.5, 0.5, 1.15]),
+        (name: "lower", shape: Sphere(radius: 0.15), density: 1.2, position: [0.55, 0.55, 0.8]),
+        (name: "bar", shape: Ellipsoid(radii: [0.2, 0.1, 0.08]), density: 2.0, position: [0.45, 0.5, 0.3], rotation: [0.3, 0.2, 0.1]),
+    ],
+)"#;
+
 /// Two runs of a scene on the same processes are the same to the bit: the global quantities
 /// and this process's fields after `steps` steps; returns the number of processes where they
 /// differ (0 expected).
