@@ -49,6 +49,10 @@ pub fn density(
         let phase = &out.rho_phase;
         (0..rows).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
+            // (A plane of the patch held by another process.)
+            if !patch.holds(&grid, c) {
+                return;
+            }
             let nodes = patch.row(&grid, b, c);
             for a in 0..dx {
                 let g = nodes.index(a);

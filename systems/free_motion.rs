@@ -80,12 +80,7 @@ impl crate::schedule::Plugin for FreeMotionPlugin {
     fn build(&self, ctx: &mut crate::schedule::PluginContext) -> anyhow::Result<()> {
         use crate::schedule::PhysicsSet;
         if ctx.mode().vacuum {
-            ctx.share_resource(|w| {
-                BodySums::new(
-                    w.resource::<Grid>(),
-                    w.get_resource::<crate::parallel::Decomposition>(),
-                )
-            });
+            ctx.share_resource(BodySums::of_world);
             ctx.add_system(PhysicsSet::FreeMotion, "free_motion", free_motion)?;
         }
         Ok(())

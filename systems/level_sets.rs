@@ -53,7 +53,7 @@ pub fn level_sets(
             continue;
         }
         match sampled {
-            Err(SampleError::Outside(axis)) => {
+            Err(SampleError(axis)) => {
                 failure.reason = Some(format!(
                     "static body `{}` reaches outside the periodic box along {} at step {} \
                      (t = {:.6}): centre {:?}; a static body's level set is clipped at the box's \
@@ -64,14 +64,6 @@ pub fn level_sets(
                     time.step,
                     time.t,
                     &state.center.to_array()[..grid.dim],
-                ))
-            }
-            Err(SampleError::AroundSlab) => {
-                failure.reason = Some(format!(
-                    "body `{}` spans nearly the whole box along z at step {} (t = {:.6}): its \
-                     patch wraps round a process's slab; on several processes a body must be \
-                     shorter along z than the box less one slab (run on fewer processes)",
-                    body.name, time.step, time.t,
                 ))
             }
             Ok(()) => {}
@@ -221,9 +213,7 @@ pub fn sample(
     let (lo, dims, clipped) = patch_box(&whole, state, shape, patch_reach(grid, eps), wrap);
     patch.whole = (lo, dims);
     let outside = solid_on_clipped_side(&whole, state, shape, (lo, dims), &clipped);
-    let Some((lo, dims)) = slab_part(grid, lo, dims) else {
-        return Err(SampleError::AroundSlab);
-    };
+    let (lo, dims) = slab_part(grid, lo, dims);
     patch.lo = lo;
     patch.dims = dims;
     let len = dims[0] * dims[1] * dims[2];
@@ -250,33 +240,24 @@ pub fn sample(
         });
     patch.sampled = true;
     match outside {
-        Some(axis) => Err(SampleError::Outside(axis)),
+        Some(axis) => Err(SampleError(axis)),
         None => Ok(()),
     }
 }
 
-/// Why a body's patch could not be sampled whole.
+/// The solid of a static body reaches the box's boundary along this axis, on a side where its
+/// patch is clipped: a part of the body would be lost.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SampleError {
-    /// The solid of a static body reaches the box's boundary along this axis, on a side where
-    /// its patch is clipped.
-    Outside(usize),
-    /// On several processes, the box (wrapping round the periodic z axis) holds both ends of
-    /// this process's slab but not its middle: nearly the whole box's length along z.
-    AroundSlab,
-}
+pub struct SampleError(pub usize);
 
 /// The part of a box of the whole grid (first node `lo`, unwrapped, `dims` nodes) that lies in
 /// `grid`'s slab: its first node (at the image next to the box) and node counts, all of the
-/// box unless `grid` is a slab. `None` when the box holds both ends of the slab but not its
-/// middle (it wraps round the z axis, nearly as long as the box).
-pub fn slab_part(
-    grid: &Grid,
-    lo: [isize; 3],
-    dims: [usize; 3],
-) -> Option<([isize; 3], [usize; 3])> {
+/// box unless `grid` is a slab. A box that wraps round the periodic z axis may hold both ends of
+/// the slab but not its middle (a box nearly as long as the whole grid): then its part is the
+/// whole box, whose planes between the two ends are other processes' ([`GridPatch::holds`]).
+pub fn slab_part(grid: &Grid, lo: [isize; 3], dims: [usize; 3]) -> ([isize; 3], [usize; 3]) {
     if !grid.is_slab() || dims[2] == 0 {
-        return Some((lo, dims));
+        return (lo, dims);
     }
     let (nzw, nz, d) = (grid.nz_whole as isize, grid.n[2] as isize, dims[2] as isize);
     // The box's offset of the slab's first plane (at its image at or after the box's start);
@@ -285,10 +266,7 @@ pub fn slab_part(
     let first = (s < d).then(|| (s, (s + nz).min(d)));
     let wrapped = (s + nz > nzw).then(|| (0, (s + nz - nzw).min(d)));
     let (c0, c1) = match (first, wrapped) {
-        (Some(a), Some(b)) if b.1 > 0 => {
-            let _ = a;
-            return None;
-        }
+        (Some(_), Some(b)) if b.1 > 0 => return (lo, dims),
         (Some(a), _) => a,
         (None, Some(b)) => b,
         (None, None) => (0, 0),
@@ -297,7 +275,7 @@ pub fn slab_part(
     let mut dims = dims;
     lo[2] += c0;
     dims[2] = (c1 - c0).max(0) as usize;
-    Some((lo, dims))
+    (lo, dims)
 }
 
 /// The first axis along which the solid (φ > 0) reaches the periodic box's boundary on a

@@ -123,6 +123,11 @@ pub fn penalization(
                 .enumerate()
                 .for_each(|(r, acc)| {
                     let (b, c) = (r % dy, r / dy);
+                    // (A plane of the patch held by another process adds zero here.)
+                    if !patch.holds(&grid, c) {
+                        acc.fill(0.0);
+                        return;
+                    }
                     let nodes = patch.row(&grid, b, c);
                     let mut f = DVec3::ZERO;
                     let mut m = DVec3::ZERO;
@@ -167,7 +172,7 @@ pub fn penalization(
                 });
             if own_force {
                 let mut t = [[0.0; 16]];
-                sums.patch_total(patch, &mut t);
+                sums.patch_total(&grid, patch, &mut t);
                 let t = t[0];
                 *hydro = Hydro {
                     force: DVec3::new(t[0], t[1], t[2]),
@@ -196,12 +201,7 @@ impl crate::schedule::Plugin for PenalizationPlugin {
         use crate::schedule::PhysicsSet;
         let mode = ctx.mode();
         if mode.fluid() && mode.has_bodies() {
-            ctx.share_resource(|w| {
-                BodySums::new(
-                    w.resource::<Grid>(),
-                    w.get_resource::<crate::parallel::Decomposition>(),
-                )
-            });
+            ctx.share_resource(BodySums::of_world);
             ctx.share_resource(|w| {
                 crate::solvers::operators::CurlHalo::of_grid(
                     w.resource::<crate::base::grid::Grid>(),

@@ -331,6 +331,9 @@ fn reduced_potential(
         let o = crate::base::grid::SyncPtr(pot.as_mut_ptr());
         (0..patch.len() / dx).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
+            if !patch.holds(grid, c) {
+                return;
+            }
             let nodes = patch.row(grid, b, c);
             for a in 0..dx {
                 if patch.chi[r * dx + a] > 0.0 {
@@ -367,6 +370,9 @@ fn rigid_walls(
         let o = crate::base::grid::SyncPtr(out.as_mut_ptr());
         (0..patch.len() / dx).into_par_iter().for_each(|r| {
             let (b, c) = (r % dy, r / dy);
+            if !patch.holds(grid, c) {
+                return;
+            }
             let nodes = patch.row(grid, b, c);
             for a in 0..dx {
                 let chi = patch.chi[r * dx + a];
@@ -754,12 +760,7 @@ impl crate::schedule::Plugin for PressurePlugin {
                     w.get_resource::<crate::parallel::Decomposition>(),
                 )
             });
-            ctx.share_resource(|w| {
-                BodySums::new(
-                    w.resource::<Grid>(),
-                    w.get_resource::<crate::parallel::Decomposition>(),
-                )
-            });
+            ctx.share_resource(BodySums::of_world);
             let grid = ctx.world.resource::<Grid>().clone();
             let multigrid = ctx.world.resource::<Params>().multigrid;
             // Walls rigid in the projection need the multigrid preconditioner (a contrast of

@@ -330,12 +330,7 @@ impl crate::schedule::Plugin for RigidVelocityPlugin {
         use crate::schedule::PhysicsSet;
         let mode = ctx.mode();
         if mode.fluid() && mode.has_bodies() {
-            ctx.share_resource(|w| {
-                BodySums::new(
-                    w.resource::<Grid>(),
-                    w.get_resource::<crate::parallel::Decomposition>(),
-                )
-            });
+            ctx.share_resource(BodySums::of_world);
             ctx.add_system(PhysicsSet::RigidVelocity, "rigid_velocity", rigid_velocity)?;
         }
         Ok(())

@@ -162,6 +162,11 @@ const CHECKS: &[Check] = &[
         0.0,
     ),
     (
+        "periodic_sphere_matches_whole",
+        |c| checks::simulation_matches_whole(c, checks::PERIODIC_SPHERE, 12),
+        0.0,
+    ),
+    (
         "split_body_step_allocates_nothing",
         split_body_step_allocates_nothing,
         0.0,

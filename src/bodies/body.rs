@@ -194,6 +194,14 @@ impl GridPatch {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// Whether plane `c` of the patch is one of `grid`'s (always, unless `grid` is a slab whose
+    /// patch wraps round it: then the planes between its two ends are other processes').
+    /// Loops over the patch skip the others' rows.
+    #[inline]
+    pub fn holds(&self, grid: &Grid, c: usize) -> bool {
+        let k = (self.lo[2] + c as isize).rem_euclid(grid.nz_whole as isize) as usize;
+        k >= grid.k0 && k < grid.k0 + grid.n[2]
+    }
     /// Whether the body's whole box holds grid nodes (the same on every process).
     pub fn on_grid(&self) -> bool {
         self.whole.1.iter().all(|&d| d > 0)

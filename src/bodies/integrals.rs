@@ -33,8 +33,32 @@ impl BodySums {
     /// Room for the largest patch of `grid` (ny nz rows), [`MAX_WEIGHTS`] weights a row; with
     /// `split`, the patch sums are added over its processes.
     pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
+        Self::with_planes(grid, split, grid.n[2])
+    }
+
+    /// [`BodySums::new`] for the grid, split and bodies of `world`: on a slab a moving body's
+    /// patch may span its whole box along z ([`GridPatch::holds`]), so the rows have room for
+    /// the longest box of a moving body too.
+    pub fn of_world(world: &World) -> Self {
+        let grid = world.resource::<Grid>();
+        let split = world.get_resource::<Decomposition>();
+        let mut planes = grid.n[2];
+        if grid.is_slab()
+            && let Some(mut q) = world.try_query::<(&Body, &crate::bodies::BodyShape)>()
+        {
+            for (body, shape) in q.iter(world) {
+                if let (false, Some((lo, hi))) = (body.is_static(), shape.level_set.bounds()) {
+                    let across = ((hi - lo).length() / grid.h).ceil() as usize + 2;
+                    planes = planes.max(across.min(grid.nz_whole));
+                }
+            }
+        }
+        Self::with_planes(grid, split, planes)
+    }
+
+    fn with_planes(grid: &Grid, split: Option<&Decomposition>, planes: usize) -> Self {
         BodySums {
-            rows: vec![[0.0; 16]; MAX_WEIGHTS * grid.n[1] * grid.n[2]],
+            rows: vec![[0.0; 16]; MAX_WEIGHTS * grid.n[1] * planes],
             planes: PlaneSums::new(grid.nz_whole, MAX_WEIGHTS * 16),
             comm: split.map(|d| d.comm.clone()),
         }
@@ -44,7 +68,7 @@ impl BodySums {
     /// row buffer, `per` entries a patch row of this process (`out.len()` of them): the rows of
     /// each plane in order, then the planes of the whole box in order ([`PlaneSums`]). Every
     /// process must call it, for the same bodies in the same order.
-    pub fn patch_total(&mut self, patch: &GridPatch, out: &mut [[f64; 16]]) {
+    pub fn patch_total(&mut self, grid: &Grid, patch: &GridPatch, out: &mut [[f64; 16]]) {
         let per = out.len();
         let (dy, dz) = (patch.dims[1], patch.dims[2]);
         let whole_dz = patch.whole.1[2];
@@ -52,7 +76,7 @@ impl BodySums {
         let c0 = (patch.lo[2] - patch.whole.0[2]) as usize;
         self.planes.clear(whole_dz);
         if !patch.is_empty() {
-            for c in 0..dz {
+            for c in (0..dz).filter(|&c| patch.holds(grid, c)) {
                 let p = self.planes.plane_mut(c0 + c);
                 for b in 0..dy {
                     let r = b + dy * c;
@@ -161,8 +185,13 @@ pub fn integrate_n<const N: usize>(
         .enumerate()
         .for_each(|(r, acc)| {
             let (b, c) = (r % dy, r / dy);
-            let nodes = patch.row(grid, b, c);
             let mut s = [ZERO; N];
+            // (A plane of the patch held by another process adds zero here.)
+            if !patch.holds(grid, c) {
+                acc.copy_from_slice(&s);
+                return;
+            }
+            let nodes = patch.row(grid, b, c);
             for a in 0..dx {
                 // The wrapped node for the fields, its image next to the body (unwrapped
                 // position) for the moments.
@@ -200,7 +229,7 @@ pub fn integrate_n<const N: usize>(
             acc.copy_from_slice(&s);
         });
     let mut t = [ZERO; N];
-    sums.patch_total(patch, &mut t);
+    sums.patch_total(grid, patch, &mut t);
     std::array::from_fn(|q| moments(center, dv, t[q]).unwrap_or(empty))
 }
 

@@ -88,9 +88,12 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
             Some((lo, hi)) => {
                 let r = (hi - lo).length() * 0.5;
                 let n = ((2.0 * r / grid.h).ceil() as usize + 3).max(1);
+                // (Along z the whole grid's count: on a slab a patch that wraps round it spans
+                // its whole box, `GridPatch::holds`.)
+                let whole = grid.whole();
                 let mut c = 1;
                 for a in 0..grid.dim {
-                    c *= n.min(grid.n[a]);
+                    c *= n.min(whole.n[a]);
                 }
                 c
             }

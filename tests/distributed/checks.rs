@@ -264,6 +264,17 @@ pub const BODIES: &str = r#"Scene(
     ],
 )"#;
 
+/// A sphere settling in a periodic box whose patch (13 planes of 18) wraps round the periodic
+/// z axis so that on two processes it holds both ends of the first one's slab but not its
+/// middle (the patch is then the whole box there, `GridPatch::holds`).
+pub const PERIODIC_SPHERE: &str = r#"Scene(
+    name: "periodic-sphere",
+    domain: (extent: [1.0, 1.0, 1.125], cells: [16, 16, 18]),
+    fluid: (density: 1.0, viscosity: 0.05, gravity: [0.0, 0.0, -60.0]),
+    numerics: (end_time: 1.0),
+    bodies: [(name: "ball", shape: Sphere(radius: 0.2), density: 2.0, position: [0.5, 0.5, 0.8125])],
+)"#;
+
 /// Two runs of a scene on the same processes are the same to the bit: the global quantities
 /// and this process's fields after `steps` steps; returns the number of processes where they
 /// differ (0 expected).

@@ -39,6 +39,10 @@ fn one_process_checks() {
         0.0
     );
     assert_eq!(
+        checks::simulation_matches_whole(solo(), checks::PERIODIC_SPHERE, 2),
+        0.0
+    );
+    assert_eq!(
         checks::split_runs_are_bit_identical(solo(), checks::VORTEX_RING, 2),
         0.0
     );
