@@ -49,24 +49,20 @@ pub fn level_sets(
         }
         let offset = wall_offset(&params, body, grid.h);
         let sampled = sample(&grid, body, state, shape, &mut patch, eps, offset);
-        if failure.reason.is_some() {
-            continue;
-        }
-        match sampled {
-            Err(SampleError(axis)) => {
-                failure.reason = Some(format!(
-                    "static body `{}` reaches outside the periodic box along {} at step {} \
-                     (t = {:.6}): centre {:?}; a static body's level set is clipped at the box's \
-                     last nodes, not wrapped around (moving bodies are); move it inside or \
-                     enlarge the domain",
-                    body.name,
-                    ["x", "y", "z"][axis],
-                    time.step,
-                    time.t,
-                    &state.center.to_array()[..grid.dim],
-                ))
-            }
-            Ok(()) => {}
+        if let Err(SampleError(axis)) = sampled
+            && failure.reason.is_none()
+        {
+            failure.reason = Some(format!(
+                "static body `{}` reaches outside the periodic box along {} at step {} \
+                 (t = {:.6}): centre {:?}; a static body's level set is clipped at the box's \
+                 last nodes, not wrapped around (moving bodies are); move it inside or \
+                 enlarge the domain",
+                body.name,
+                ["x", "y", "z"][axis],
+                time.step,
+                time.t,
+                &state.center.to_array()[..grid.dim],
+            ));
         }
     }
 }
