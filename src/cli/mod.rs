@@ -171,12 +171,9 @@ pub fn status(
             restart,
         } => {
             // Under mpirun, the processes of the run (kept until it ends).
-            let procs = match crate::parallel::comm::launched() {
+            let procs = match processes() {
                 Ok(p) => p,
-                Err(e) => {
-                    eprintln!("error: {e:#}");
-                    return 2;
-                }
+                Err(code) => return code,
             };
             let opts = crate::run::RunOptions {
                 out,
@@ -199,12 +196,9 @@ pub fn status(
             plots,
         } => {
             // Under mpirun, the processes the cases split over (kept until they end).
-            let procs = match crate::parallel::comm::launched() {
+            let procs = match processes() {
                 Ok(p) => p,
-                Err(e) => {
-                    eprintln!("error: {e:#}");
-                    return 2;
-                }
+                Err(code) => return code,
             };
             validate::validate(
                 &cases,
@@ -226,6 +220,15 @@ pub fn status(
 }
 
 /// Size rayon's global pool; an exit code if `--threads` is 0 or the pool cannot be made.
+/// The processes of `mpirun` when started by it (MPI initialized), or the exit status of an
+/// error said on stderr (a build without MPI started on several processes).
+fn processes() -> Result<Option<crate::parallel::comm::Processes>, u8> {
+    crate::parallel::comm::launched().map_err(|e| {
+        eprintln!("error: {e:#}");
+        2
+    })
+}
+
 fn set_threads(threads: Option<usize>) -> Option<u8> {
     let n = threads?;
     if n == 0 {

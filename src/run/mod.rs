@@ -194,6 +194,28 @@ fn log_error(e: &anyhow::Error) {
     }
 }
 
+/// The time series files a checkpoint records the lengths of (`None`: a run without it).
+fn csv_lengths(p: &RunProgress) -> [(&'static str, Option<u64>); 3] {
+    [
+        ("series.csv", Some(p.series_len)),
+        ("bodies.csv", p.bodies_len),
+        ("contacts.csv", p.contacts_len),
+    ]
+}
+
+/// Cuts the time series files in `dir` back to their lengths at the checkpoint of `p`.
+fn cut_csvs(dir: &Path, p: &RunProgress) -> anyhow::Result<()> {
+    for (name, len) in csv_lengths(p) {
+        let Some(len) = len else { continue };
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(dir.join(name))
+            .and_then(|f| f.set_len(len))
+            .with_context(|| format!("cannot cut {name} back to the checkpoint"))?;
+    }
+    Ok(())
+}
+
 /// A run in progress: the simulation, its open outputs and where they stand.
 struct Run {
     sim: Simulation,
@@ -329,12 +351,7 @@ pub fn restart_run(
             .into());
     }
     let p = &ck.progress;
-    let csvs = [
-        ("series.csv", Some(p.series_len)),
-        ("bodies.csv", p.bodies_len),
-        ("contacts.csv", p.contacts_len),
-    ];
-    for (name, len) in csvs {
+    for (name, len) in csv_lengths(p) {
         let Some(len) = len else { continue };
         let have = std::fs::metadata(dir.join(name)).map(|m| m.len()).ok();
         if have.is_none_or(|h| h < len) {
@@ -375,11 +392,6 @@ fn continue_run(
     wall0: Instant,
 ) -> anyhow::Result<RunSummary> {
     let p = &ck.progress;
-    let csvs = [
-        ("series.csv", Some(p.series_len)),
-        ("bodies.csv", p.bodies_len),
-        ("contacts.csv", p.contacts_len),
-    ];
     checkpoint::remove_temp_files(dir)
         .with_context(|| format!("cannot clean up {}", dir.display()))?;
     let slices = dir.join(crate::io::slices::SLICE_DIR);
@@ -390,14 +402,7 @@ fn continue_run(
     // Checkpoints after this one belong to the run this restart replaces.
     checkpoint::remove_after(dir, ck.time.step)
         .with_context(|| format!("cannot remove later checkpoints in {}", dir.display()))?;
-    for (name, len) in csvs {
-        let Some(len) = len else { continue };
-        std::fs::OpenOptions::new()
-            .write(true)
-            .open(dir.join(name))
-            .and_then(|f| f.set_len(len))
-            .with_context(|| format!("cannot cut {name} back to the checkpoint"))?;
-    }
+    cut_csvs(dir, p)?;
     // Snapshots written after the checkpoint are written again (or not, with another end).
     snaps.cut_back()?;
     atomic_write(&dir.join("scene.ron"), sim.scene().to_ron().as_bytes())

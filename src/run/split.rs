@@ -234,19 +234,7 @@ pub fn restart_split(
         if let Some(s) = &surfaces {
             s.pvd().write().context("cannot write bodies.pvd")?;
         }
-        let csvs = [
-            ("series.csv", Some(p.series_len)),
-            ("bodies.csv", p.bodies_len),
-            ("contacts.csv", p.contacts_len),
-        ];
-        for (name, len) in csvs {
-            let Some(len) = len else { continue };
-            std::fs::OpenOptions::new()
-                .write(true)
-                .open(dir.join(name))
-                .and_then(|f| f.set_len(len))
-                .with_context(|| format!("cannot cut {name} back to the checkpoint"))?;
-        }
+        super::cut_csvs(&dir, p)?;
         let bodies = match p.bodies_len {
             Some(_) => Some(BodiesCsv::append(&dir.join("bodies.csv"))?),
             None => None,

@@ -61,23 +61,17 @@ pub fn run_matches_one_process() -> Result<(), String> {
     Ok(())
 }
 
-/// Three bodies of two shapes and three densities falling in a closed channel (a static
-/// body) at 20 x 20 x 40, two of them in contact within the run, which a checkpoint cuts in
-/// half.
-const BODIES_SCENE: &str = r#"Scene(
-    name: "bodies",
-    domain: (extent: [1.0, 1.0, 2.0], cells: [20, 20, 40]),
-    fluid: (density: 1.0, viscosity: 0.01, gravity: [0.0, 0.0, -980.0]),
-    numerics: (dt: Adaptive(c: 0.8, dt_max: 0.07), end_time: 0.12),
-    contact: (kappa: 25.0),
-    bodies: [
-        (name: "channel", shape: Complement(Box(half_extents: [0.425, 0.425, 0.925])), kind: Static, position: [0.5, 0.5, 1.0]),
-        (name: "upper", shape: Sphere(radius: 0.15), density: 1.5, position: [0.5, 0.5, 1.15]),
-        (name: "lower", shape: Sphere(radius: 0.15), density: 1.2, position: [0.55, 0.55, 0.8]),
-        (name: "bar", shape: Ellipsoid(radii: [0.2, 0.1, 0.08]), density: 2.0, position: [0.45, 0.5, 0.3], rotation: [0.3, 0.2, 0.1]),
-    ],
-    output: (every: 0.06, fields: [Omega, Velocity, Density], precision: Double, checkpoint_every: 0.06),
-)"#;
+/// `checks::BODIES` (a channel, two spheres and an ellipsoid, two of them in contact within
+/// the run) to t = 0.12, with snapshots and checkpoints every 0.06.
+fn bodies_scene() -> String {
+    super::checks::BODIES
+        .replace("end_time: 1.0", "end_time: 0.12")
+        .replace(
+            "\n)",
+            "\n    output: (every: 0.06, fields: [Omega, Velocity, Density], precision: Double, \
+             checkpoint_every: 0.06),\n)",
+        )
+}
 
 /// `tumble run` of `scene` (in `dir`) into `out`, under `mpirun -np np` when `np` > 1.
 fn run_in(dir: &Path, scene: &str, np: usize, out: &str) -> Result<(), String> {
@@ -118,7 +112,7 @@ fn same_files(dir: &Path, a: &str, b: &str, names: &[&str]) -> Result<(), String
 /// (vorticity, velocity, density, χ, φ) bit for bit. Then the two-process run restarted from
 /// its first checkpoint ends with the same files.
 pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
-    let dir = scratch("bodies", "bodies.ron", BODIES_SCENE)?;
+    let dir = scratch("bodies", "bodies.ron", &bodies_scene())?;
     run_in(&dir, "bodies.ron", 1, "one")?;
     let csvs = [
         "series.csv",
