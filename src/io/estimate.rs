@@ -100,7 +100,14 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
     if flow {
         // Spectral: ω̂ per component and a work buffer, (nx/2 + 1) complex per nx reals.
         let nx = g.n[0] as f64;
-        per_node += (nc + 1.0) * 2.0 * (nx / 2.0 + 1.0).floor() / nx;
+        let half = 2.0 * (nx / 2.0 + 1.0).floor() / nx;
+        per_node += (nc + 1.0) * half;
+        // The no-slip of the pressure coupling without a free surface (`systems/noslip.rs`):
+        // the spread force and its response, a scratch field, and the forcing's spectra
+        // (`Spectral::reserve_forcing`: d + nc complex half fields).
+        if pressure && scene.free_surface.is_none() {
+            per_node += 2.0 * d + 1.0 + (d + nc) * half;
+        }
     }
     let b = band(&g);
     let (mut local_nodes, mut patch_nodes) = (0.0, 0.0);
