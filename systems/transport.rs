@@ -92,7 +92,7 @@ use crate::base::kernels::heaviside;
 use crate::base::pool::Pool;
 use crate::bodies::BodyFields;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
-use crate::parallel::{Decomposition, Transpose, global_max};
+use crate::parallel::{Decomposition, Halo, Transpose, global_max};
 use crate::solvers::carry::{CarryPool, CarryScratch, NEAR_CELLS, Near, carry_sweep};
 use crate::solvers::sweep::{LinePool, LineScratch, split_axes, sweep};
 use bevy_ecs::prelude::*;
@@ -117,7 +117,7 @@ struct SplitScratch {
     d: Decomposition,
     /// Per velocity component, the R planes below the slab then the R planes above it (the
     /// neighbours').
-    u_ghost: Vec<Vec<f64>>,
+    u_ghost: Halo,
     transpose: Transpose,
     /// The vorticity's components and the velocity's z component in the row layout.
     rows: Vec<Vec<f64>>,
@@ -136,23 +136,11 @@ impl SplitScratch {
         origin[1] += rows.start as f64 * grid.h;
         SplitScratch {
             d: d.clone(),
-            u_ghost: vec![vec![0.0; grid.plane() * 2 * R]; 3],
+            u_ghost: Halo::new(grid, d, R, 3),
             rows: vec![vec![0.0; transpose.rows_len()]; 4],
             packed: vec![0.0; transpose.slab_len()],
             transpose,
             rows_grid: Grid::new([grid.n[0], rows.len(), whole.n[2]], grid.h, origin),
-        }
-    }
-
-    /// Fills `u_ghost` with the neighbours' planes of the velocity.
-    fn fill_ghosts(&mut self, u: &[Vec<f64>]) {
-        for (g, c) in self.u_ghost.iter_mut().zip(u) {
-            let plane = g.len() / (2 * R);
-            let (below, above) = g.split_at_mut(R * plane);
-            let (first, last) = (&c[..R * plane], &c[c.len() - R * plane..]);
-            self.d
-                .comm
-                .exchange(&self.d.slabs, first, last, below, above);
         }
     }
 
@@ -250,10 +238,10 @@ pub fn transport(
         split,
     } = &mut *scratch;
     if let Some(sp) = split.as_mut() {
-        sp.fill_ghosts(u);
+        sp.u_ghost.fill(u);
     }
     let stretch_now = |omega: &mut [Vec<f64>], split: &Option<SplitScratch>| match split {
-        Some(sp) => stretch_ghosted(&grid, dt, omega, u, Some(&sp.u_ghost)),
+        Some(sp) => stretch_ghosted(&grid, dt, omega, u, Some(sp.u_ghost.all())),
         None => stretch(&grid, dt, omega, u),
     };
     if grid.dim == 3 && !*reverse {

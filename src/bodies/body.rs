@@ -463,6 +463,15 @@ impl BodyFields {
     }
 }
 
+/// The most nodes along an axis a body's grid box can span in any orientation, on a grid of
+/// spacing `h`: its bounding sphere (the reference level set's box, band included) across, and
+/// a node of rounding on each side and one of margin; `None` for an unbounded shape.
+pub fn box_span(level_set: &crate::bodies::levelset::LocalLevelSet, h: f64) -> Option<usize> {
+    level_set
+        .bounds()
+        .map(|(lo, hi)| ((hi - lo).length() / h).ceil() as usize + 3)
+}
+
 /// A 3-vector from a scene list (missing entries are zero).
 pub fn vec3(v: &[f64]) -> DVec3 {
     DVec3::new(

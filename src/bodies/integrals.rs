@@ -30,15 +30,11 @@ impl BodySums {
         &mut self.rows
     }
 
-    /// Room for the largest patch of `grid` (ny nz rows), [`MAX_WEIGHTS`] weights a row; with
-    /// `split`, the patch sums are added over its processes.
-    pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
-        Self::with_planes(grid, split, grid.n[2])
-    }
-
-    /// [`BodySums::new`] for the grid, split and bodies of `world`: on a slab a moving body's
-    /// patch may span its whole box along z ([`GridPatch::holds`]), so the rows have room for
-    /// the longest box of a moving body too.
+    /// Room for the largest patch of the grid of `world` (ny nz rows), [`MAX_WEIGHTS`] weights
+    /// a row; when split (its [`Decomposition`]) the patch sums are added over the processes,
+    /// and since on a slab a moving body's patch may span its whole box along z
+    /// ([`GridPatch::holds`]), the rows have room for a moving body's longest box too
+    /// ([`crate::bodies::box_span`]).
     pub fn of_world(world: &World) -> Self {
         let grid = world.resource::<Grid>();
         let split = world.get_resource::<Decomposition>();
@@ -47,16 +43,14 @@ impl BodySums {
             && let Some(mut q) = world.try_query::<(&Body, &crate::bodies::BodyShape)>()
         {
             for (body, shape) in q.iter(world) {
-                if let (false, Some((lo, hi))) = (body.is_static(), shape.level_set.bounds()) {
-                    let across = ((hi - lo).length() / grid.h).ceil() as usize + 2;
-                    planes = planes.max(across.min(grid.nz_whole));
+                if let (false, Some(n)) = (
+                    body.is_static(),
+                    crate::bodies::box_span(&shape.level_set, grid.h),
+                ) {
+                    planes = planes.max(n.min(grid.nz_whole));
                 }
             }
         }
-        Self::with_planes(grid, split, planes)
-    }
-
-    fn with_planes(grid: &Grid, split: Option<&Decomposition>, planes: usize) -> Self {
         BodySums {
             rows: vec![[0.0; 16]; MAX_WEIGHTS * grid.n[1] * planes],
             planes: PlaneSums::new(grid.nz_whole, MAX_WEIGHTS * 16),

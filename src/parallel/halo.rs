@@ -55,14 +55,9 @@ impl Halo {
             .exchange(&self.d.slabs, first, last, below, above);
     }
 
-    /// The ghosts of component `c`: `w` planes below, then `w` above.
-    pub fn ghosts(&self, c: usize) -> &[f64] {
-        &self.ghosts[c]
-    }
-
-    /// Planes a side.
-    pub fn width(&self) -> usize {
-        self.w
+    /// The ghosts of every component: per component, `w` planes below, then `w` above.
+    pub fn all(&self) -> &[Vec<f64>] {
+        &self.ghosts
     }
 }
 

@@ -41,11 +41,6 @@ impl PlaneSums {
         self.buf.is_empty()
     }
 
-    /// Values per plane.
-    pub fn width(&self) -> usize {
-        self.width
-    }
-
     /// Zeroes the first `planes` planes' partials (before a process fills its own).
     pub fn clear(&mut self, planes: usize) {
         self.buf[..planes * self.width].fill(0.0);

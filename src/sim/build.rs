@@ -84,10 +84,8 @@ pub fn spawn_bodies(world: &mut World, scene: &ValidScene, grid: &Grid) -> anyho
         };
         let mut patch = GridPatch::default();
         // The largest box the body can need in any orientation: its bounding sphere.
-        let cap = match level_set.bounds() {
-            Some((lo, hi)) => {
-                let r = (hi - lo).length() * 0.5;
-                let n = ((2.0 * r / grid.h).ceil() as usize + 3).max(1);
+        let cap = match crate::bodies::box_span(&level_set, grid.h) {
+            Some(n) => {
                 // (Along z the whole grid's count: on a slab a patch that wraps round it spans
                 // its whole box, `GridPatch::holds`.)
                 let whole = grid.whole();

@@ -146,18 +146,7 @@ pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
         .min()
         .ok_or("np2 wrote no checkpoint")?;
     copy_dir(&dir.join("np2"), &dir.join("full"))?;
-    let mut restart = mpirun(2);
-    let st = restart
-        .arg(env!("CARGO_BIN_EXE_tumble"))
-        .args(["run", "--quiet", "--restart"])
-        .arg(dir.join("np2").join(&ck))
-        .current_dir(&dir)
-        .stdout(std::process::Stdio::null())
-        .status()
-        .map_err(|e| e.to_string())?;
-    if !st.success() {
-        return Err(format!("the restart from {ck} failed ({st})"));
-    }
+    restart(&dir, dir.join("np2").join(&ck))?;
     same_files(&dir, "full", "np2", &csvs).map_err(|e| format!("after the restart: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
@@ -232,6 +221,22 @@ fn without_seconds(line: &str) -> String {
         })
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+/// `mpirun -np 2 tumble run --restart FROM` (a run directory or rank 0's checkpoint) in `dir`.
+fn restart(dir: &Path, from: impl AsRef<std::ffi::OsStr>) -> Result<(), String> {
+    let st = mpirun(2)
+        .arg(env!("CARGO_BIN_EXE_tumble"))
+        .args(["run", "--quiet", "--restart"])
+        .arg(from.as_ref())
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .map_err(|e| e.to_string())?;
+    st.success().then_some(()).ok_or(format!(
+        "the restart from {:?} failed ({st})",
+        from.as_ref()
+    ))
 }
 
 /// A copy of directory `from` (files only) at `to`.
@@ -378,17 +383,7 @@ pub fn killed_and_restarted_is_bit_identical() -> Result<(), String> {
     if st.success() {
         return Err("the run ended before one of its processes was killed".into());
     }
-    let mut restart = mpirun(2);
-    let st = restart
-        .arg(tumble)
-        .args(["run", "--quiet", "--restart", "killed"])
-        .current_dir(&dir)
-        .stdout(std::process::Stdio::null())
-        .status()
-        .map_err(|e| e.to_string())?;
-    if !st.success() {
-        return Err(format!("the restart failed ({st})"));
-    }
+    restart(&dir, "killed")?;
     for file in [
         "series.csv",
         "fields_000003.pvti",
