@@ -10,17 +10,11 @@
 //! bodies (eq. 19): ρ = (1 - Σχ_i) ρ_P + Σ ρ_i χ_i, and the variable-density projection
 //! (`pressure`) makes the baroclinic vorticity of gravity and inertia on the interface.
 //!
-//! * Transport: φ_w rides particles as the vorticity does (Hieber & Koumoutsakos, J. Comput.
-//!   Phys. 210 (2005), the paper's ref. [15]): the same dimensionally split RK2 push and M'4
-//!   remesh (every node is a particle, the axis order alternating every step), with the
-//!   velocity u^{n+1} of this step's Poisson solve. The interface and the flow then advance as
-//!   a symplectic Euler pair (the baroclinic vorticity from φ_w^n, then φ_w moved by the
-//!   velocity it made), so an interface oscillation neither grows nor decays from the time
-//!   stepping. Carried instead by the transport's mid-step velocity extrapolated from u^n and
-//!   u^{n-1} (before this step's baroclinic increment), a standing wave at ratio 1:10 grew by
-//!   12% per half period.
-//!   In momentum form (`transport`) φ_w rides the particles that carry the mass and the
-//!   momentum, with their weights, and this system does not move it again.
+//! * Transport: φ_w rides the particles of the momentum form (`transport`), which carry it
+//!   with the mass and the momentum and remesh all three with the same weights, pushed by the
+//!   velocity of this step's projection: the interface and the flow advance as a symplectic
+//!   Euler pair, so an interface oscillation neither grows nor decays from the time stepping.
+//!   This system does not move it again.
 //! * Redistancing: φ_w is kept a signed distance within the band (|φ_w| ≤ `band`, clipped
 //!   beyond) by pseudo-time iterations of ∂φ/∂τ + sgn(φ⁰)(|∇φ| - 1) = 0 (Sussman, Smereka &
 //!   Osher 1994) with Godunov's upwind |∇φ|, and the subcell fix of Russo & Smereka
@@ -73,15 +67,39 @@
 //!   up to 0.86% of its liquid outside the spheres (0.06% now).
 //!
 //! Sums are taken row by row in a fixed order: the results do not depend on the thread count.
+//! The extensions into the walls and the bodies read φ_w as it was before them, so they do not
+//! depend on the order of the nodes either.
+//!
+//! On several processes each holds its planes of φ_w; the redistancing reads one ghost plane a
+//! side. The extensions read φ_w at points a body's depth away along a normal, so they read the
+//! whole grid's φ_w, gathered from every process (one whole field on each, the plan of
+//! `docs/scaling.md` replaces it by a halo as wide as the deepest reach), and a moving body's
+//! level set beyond the slab's part of its patch is evaluated from its shape, as its sampling
+//! does. The results are the one-process results bit for bit.
 
-use crate::base::fields::{Fields, Params, SimTime};
+use crate::base::fields::Params;
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::kernels::heaviside;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
-use crate::bodies::{Body, BodyFields, GridPatch};
-use crate::solvers::sweep::{LinePool, LineScratch, split_axes, sweep};
+use crate::bodies::{Body, BodyFields, BodyShape, GridPatch, RigidState};
+use crate::parallel::halo::{plane, z_line};
+use crate::parallel::{Decomposition, Gather, Halo, RowSums};
 use bevy_ecs::prelude::*;
+use glam::DVec3;
 use rayon::prelude::*;
+
+/// The bodies as the free surface reads them: a moving body's level set beyond its slab's
+/// part of the patch is evaluated from its shape and pose.
+type Bodies<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Body,
+        &'static GridPatch,
+        &'static RigidState,
+        &'static BodyShape,
+    ),
+>;
 
 /// Pseudo-time iterations of the redistancing per step.
 pub const STEP_ITERATIONS: usize = 2;
@@ -94,22 +112,41 @@ struct WallNode {
     from: [f64; 3],
 }
 
-/// The free surface's scratch: the sweeps' line buffers, the level set before redistancing and
-/// a second buffer for the Jacobi iterations, per-row partial sums, and the walls (set at
-/// startup from the static bodies): the nodes inside them with the point each copies, and
-/// 1 - χ_s per node (empty without walls).
+/// The free surface's scratch: the level set before redistancing and a second buffer for the
+/// Jacobi iterations, per-row partial sums, and the walls (set at startup from the static
+/// bodies): the nodes inside them with the point each copies, and 1 - χ_s per node (empty
+/// without walls).
 #[derive(Resource)]
 pub struct FreeSurfaceScratch {
-    pool: LinePool,
     phi0: Vec<f64>,
     next: Vec<f64>,
-    partial: Vec<[f64; 2]>,
+    /// Per row: the volume's partial sums, then the area's.
+    partial: Vec<f64>,
+    sums: RowSums,
     wall: Vec<WallNode>,
     in_wall: Vec<bool>,
     open: Vec<f32>,
     /// 1 - χ_s - Σχ_i per node with the moving bodies at their current pose (empty without
     /// any body): the weight of the liquid volume that is kept.
     outside: Vec<f32>,
+    /// On several processes: φ_w of the whole grid (gathered, the same on every process) and
+    /// the halo and gather that make it.
+    split: Option<SplitLevelSet>,
+}
+
+/// The free surface on a slab. The extensions into the walls and the bodies read φ_w at points
+/// along a normal, up to a body's depth away: they read the whole grid's φ_w, gathered from
+/// every process (one field on each); the redistancing reads one ghost plane a side.
+struct SplitLevelSet {
+    gather: Gather,
+    /// Ghost planes of φ⁰ (or the walls' level set at startup) and φ.
+    halo: Halo,
+    /// The whole grid's φ_w: after the transport for the walls, after the walls for the
+    /// bodies, and at the end of the step (for the next step's phase density and the
+    /// snapshots).
+    whole: Vec<f64>,
+    /// Whether each node of the whole grid lies inside a wall (for the snapshots).
+    whole_in_wall: Vec<bool>,
 }
 
 impl FreeSurfaceScratch {
@@ -118,18 +155,44 @@ impl FreeSurfaceScratch {
         &self.in_wall
     }
 
-    /// Scratch for `grid`.
-    pub fn new(grid: &Grid) -> Self {
-        let nmax = *grid.n.iter().max().unwrap_or(&1);
+    /// On several processes: the whole grid's φ_w and which of its nodes lie inside a wall
+    /// (empty without walls), as of the end of the last step (`None` on one process, where
+    /// the level set itself is whole).
+    pub fn whole_level_set(&self) -> Option<(&[f64], &[bool])> {
+        self.split
+            .as_ref()
+            .map(|s| (&s.whole[..], &s.whole_in_wall[..]))
+    }
+
+    /// Scratch for `grid`, a slab of `split`'s when the run is split.
+    pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
         FreeSurfaceScratch {
-            pool: LinePool::per_thread(move || LineScratch::new(nmax, 1)),
             phi0: vec![0.0; grid.len()],
             next: vec![0.0; grid.len()],
-            partial: vec![[0.0; 2]; grid.len() / grid.n[0]],
+            partial: vec![0.0; 2 * (grid.len() / grid.n[0])],
+            sums: RowSums::new(grid, split),
             wall: Vec::new(),
             in_wall: Vec::new(),
             open: Vec::new(),
             outside: Vec::new(),
+            split: split.map(|d| SplitLevelSet {
+                gather: Gather::new(d, grid.plane()),
+                halo: Halo::new(grid, d, 1, 2),
+                whole: vec![0.0; grid.whole().len()],
+                whole_in_wall: Vec::new(),
+            }),
+        }
+    }
+
+    /// φ_w of the whole grid, `phi` (this process's planes) on one process, gathered from
+    /// every process when split (all of them call it together).
+    fn whole<'a>(split: &'a mut Option<SplitLevelSet>, phi: &'a [f64]) -> &'a [f64] {
+        match split {
+            Some(s) => {
+                s.gather.whole(phi, &mut s.whole);
+                &s.whole
+            }
+            None => phi,
         }
     }
 
@@ -157,6 +220,9 @@ impl FreeSurfaceScratch {
         for patch in moving {
             let [dx, dy, dz] = patch.dims;
             for c in 0..dz {
+                if !patch.holds(grid, c) {
+                    continue;
+                }
                 for b in 0..dy {
                     for a in 0..dx {
                         let g = patch.grid_index(grid, a, b, c);
@@ -169,7 +235,7 @@ impl FreeSurfaceScratch {
     }
 
     /// The walls from the static bodies' union level set `phi_s` (> 0 inside, `None` without
-    /// static bodies) and smoothed half-width `eps`.
+    /// static bodies; on every process or none) and smoothed half-width `eps`.
     fn set_walls(&mut self, grid: &Grid, phi_s: Option<&[f64]>, eps: f64) {
         self.wall.clear();
         self.in_wall.clear();
@@ -177,6 +243,11 @@ impl FreeSurfaceScratch {
         let Some(phi_s) = phi_s else {
             return;
         };
+        // The walls' level set one plane beyond the slab, for the normals.
+        let halo = self.split.as_mut().map(|s| {
+            s.halo.fill_one(0, phi_s);
+            &s.halo
+        });
         let [nx, ny, nz] = grid.n;
         let h = grid.h;
         self.open = phi_s
@@ -207,12 +278,16 @@ impl FreeSurfaceScratch {
                                 grid.idx(i, wrap(j, -1, ny), k),
                                 grid.idx(i, wrap(j, 1, ny), k),
                             ),
-                            _ => (
-                                grid.idx(i, j, wrap(k, -1, nz)),
-                                grid.idx(i, j, wrap(k, 1, nz)),
-                            ),
+                            _ => (usize::MAX, usize::MAX),
                         };
-                        let (pm, pq) = (phi_s[m].max(p - h), phi_s[q].max(p - h));
+                        let (pm, pq) = if a == 2 {
+                            let at =
+                                |d: isize| plane(grid, phi_s, halo, 0, k as isize + d)[i + nx * j];
+                            (at(-1), at(1))
+                        } else {
+                            (phi_s[m], phi_s[q])
+                        };
+                        let (pm, pq) = (pm.max(p - h), pq.max(p - h));
                         g[a] = -(pq - pm) / (2.0 * h);
                         // The steeper one-sided descent, for a ridge (the middle of a wall
                         // across the periodic seam, where the centred difference vanishes).
@@ -232,10 +307,11 @@ impl FreeSurfaceScratch {
                         continue;
                     }
                     let reach = (p + eps + h) / (h * norm);
+                    // In the whole grid's nodes (the slab's planes are k0 on).
                     let from = [
                         i as f64 + g[0] * reach,
                         j as f64 + g[1] * reach,
-                        k as f64 + g[2] * reach,
+                        (k + grid.k0) as f64 + g[2] * reach,
                     ];
                     self.wall.push(WallNode { node: c, from });
                 }
@@ -244,7 +320,8 @@ impl FreeSurfaceScratch {
     }
 }
 
-/// φ at the point `x` in grid units from the origin (multilinear, periodic).
+/// φ at the point `x` in grid units from the origin (multilinear, periodic) of the whole grid
+/// `grid` (`phi` one value per node).
 fn interpolate(grid: &Grid, phi: &[f64], x: [f64; 3]) -> f64 {
     let mut idx = [[0usize; 2]; 3];
     let mut w = [[1.0, 0.0]; 3];
@@ -270,27 +347,67 @@ fn interpolate(grid: &Grid, phi: &[f64], x: [f64; 3]) -> f64 {
     v
 }
 
-/// The outward unit normal -∇φ_b/|∇φ_b| of a body at its patch node `q` (inside, φ_b = `p`),
-/// by centred differences (a neighbour beyond a patch that does not span the box counts as
-/// one cell further out); at a ridge, where the centred difference vanishes (the middle of a
-/// wall across the periodic seam), the steeper one-sided descent. `None` where neither gives
-/// a direction.
-fn outward_normal(grid: &Grid, patch: &GridPatch, q: [usize; 3], p: f64) -> Option<[f64; 3]> {
-    let h = grid.h;
-    let dims = patch.dims;
-    let at = |ax: usize, d: isize| -> f64 {
-        let mut idx = q;
-        let n = dims[ax] as isize;
-        let v = q[ax] as isize + d;
-        if v < 0 || v >= n {
-            if dims[ax] != grid.n[ax] {
-                return p - h;
-            }
-            idx[ax] = v.rem_euclid(n) as usize;
-        } else {
-            idx[ax] = v as usize;
+/// A moving body as the extension reads it: its patch, and its shape and pose for its level
+/// set at the nodes of its whole box beyond the slab's part of the patch.
+#[derive(Clone, Copy)]
+struct MovingBody<'a> {
+    patch: &'a GridPatch,
+    state: &'a RigidState,
+    shape: &'a BodyShape,
+}
+
+impl MovingBody<'_> {
+    /// φ_b at the patch's node `q` (its own axes; along z any plane of the whole box, which
+    /// wraps when it spans the grid): the patch's value where it holds the node, else the
+    /// shape's at the node, the value the body's own process sampled there (the same
+    /// arithmetic); `None` beyond the whole box.
+    fn phi(&self, grid: &Grid, q: [isize; 3]) -> Option<f64> {
+        let p = self.patch;
+        let dims = p.dims;
+        if (0..grid.dim).all(|a| q[a] >= 0 && q[a] < dims[a] as isize) {
+            let q = q.map(|v| v as usize);
+            return Some(p.phi[q[0] + dims[0] * (q[1] + dims[1] * q[2])]);
         }
-        patch.phi[idx[0] + dims[0] * (idx[1] + dims[1] * idx[2])].max(p - h)
+        // Only z (on a slab) reaches past the patch inside the whole box.
+        let (wlo, wdims) = p.whole;
+        if !grid.is_slab() || (0..2).any(|a| q[a] < 0 || q[a] >= dims[a] as isize) {
+            return None;
+        }
+        let mut cw = p.lo[2] + q[2] - wlo[2];
+        if wdims[2] == grid.nz_whole {
+            cw = cw.rem_euclid(wdims[2] as isize);
+        } else if cw < 0 || cw >= wdims[2] as isize {
+            return None;
+        }
+        let lo = [p.lo[0], p.lo[1], wlo[2] + cw];
+        let x = crate::bodies::patch_pos(grid, lo, q[0] as usize, q[1] as usize, 0);
+        let x = DVec3::new(x[0], x[1], x[2]);
+        let inv = self.state.orientation.inverse();
+        Some(self.shape.level_set.phi(inv * (x - self.state.center)))
+    }
+}
+
+/// The outward unit normal -∇φ_b/|∇φ_b| of a body at its patch node `q` (inside, φ_b = `p`),
+/// by centred differences (a neighbour beyond the body's box that does not span the grid
+/// counts as one cell further out); at a ridge, where the centred difference vanishes (the
+/// middle of a wall across the periodic seam), the steeper one-sided descent. `None` where
+/// neither gives a direction.
+fn outward_normal(grid: &Grid, body: MovingBody, q: [usize; 3], p: f64) -> Option<[f64; 3]> {
+    let h = grid.h;
+    let dims = body.patch.dims;
+    let at = |ax: usize, d: isize| -> f64 {
+        let mut idx = q.map(|v| v as isize);
+        let n = dims[ax] as isize;
+        idx[ax] += d;
+        let v = idx[ax];
+        if (v < 0 || v >= n) && dims[ax] == grid.n[ax] && ax < 2 {
+            idx[ax] = v.rem_euclid(n);
+        }
+        let whole_z = dims[2] == grid.nz_whole && !grid.is_slab();
+        if ax == 2 && whole_z && (v < 0 || v >= n) {
+            idx[2] = v.rem_euclid(n);
+        }
+        body.phi(grid, idx).unwrap_or(p - h).max(p - h)
     };
     let mut g = [0.0; 3];
     let mut down = [0.0; 3];
@@ -315,26 +432,33 @@ fn outward_normal(grid: &Grid, patch: &GridPatch, q: [usize; 3], p: f64) -> Opti
 /// The fluid's φ_w continued into one body: for each node of its patch inside it (φ_b > 0), the
 /// value of the linear extrapolation along the outward normal n from the point
 /// x_s = x + (φ_b + h) n just outside, φ_w(x_s) - (φ_b + h) (φ_w(x_s + h n) - φ_w(x_s)) / h,
-/// clipped to ±`band`, is written into `next` (read from `phi`, which is left unchanged).
-fn extension_values(grid: &Grid, patch: &GridPatch, phi: &[f64], next: &mut [f64], band: f64) {
+/// clipped to ±`band`, is written into `next` (the slab's nodes), read from `whole` (the whole
+/// grid's φ_w, left unchanged).
+fn extension_values(grid: &Grid, body: MovingBody, whole: &[f64], next: &mut [f64], band: f64) {
+    let patch = body.patch;
     let [dx, dy, _] = patch.dims;
     if patch.is_empty() {
         return;
     }
     let h = grid.h;
+    let whole_grid = grid.whole();
+    let k0 = grid.k0;
     let out = crate::base::grid::SyncPtr(next.as_mut_ptr());
     (0..patch.len() / dx).into_par_iter().for_each(|r| {
         let (b, c) = (r % dy, r / dy);
+        if !patch.holds(grid, c) {
+            return;
+        }
         for a in 0..dx {
             let p = patch.phi[r * dx + a];
             if p <= 0.0 {
                 continue;
             }
             let g = patch.grid_index(grid, a, b, c);
-            let Some(n) = outward_normal(grid, patch, [a, b, c], p) else {
+            let Some(n) = outward_normal(grid, body, [a, b, c], p) else {
                 // No direction out of the body here: the node's own value.
                 // SAFETY: distinct patch nodes map to distinct grid nodes.
-                unsafe { out.write(g, phi[g]) };
+                unsafe { out.write(g, whole[g + k0 * grid.plane()]) };
                 continue;
             };
             let s = (p + h) / h;
@@ -346,14 +470,17 @@ fn extension_values(grid: &Grid, patch: &GridPatch, phi: &[f64], next: &mut [f64
             ];
             let xs = [i[0] + s * n[0], i[1] + s * n[1], i[2] + s * n[2]];
             let x1 = [xs[0] + n[0], xs[1] + n[1], xs[2] + n[2]];
-            let (f0, f1) = (interpolate(grid, phi, xs), interpolate(grid, phi, x1));
+            let (f0, f1) = (
+                interpolate(&whole_grid, whole, xs),
+                interpolate(&whole_grid, whole, x1),
+            );
             // SAFETY: distinct patch nodes map to distinct grid nodes.
             unsafe { out.write(g, (f0 - s * (f1 - f0)).clamp(-band, band)) };
         }
     });
 }
 
-/// `out[n] = value(n)` at every grid node `n` inside a body (its patch's φ > 0).
+/// `out[n] = value(n)` at every grid node `n` of the slab inside a body (its patch's φ > 0).
 fn write_inside(
     grid: &Grid,
     patch: &GridPatch,
@@ -367,6 +494,9 @@ fn write_inside(
     let out = crate::base::grid::SyncPtr(out.as_mut_ptr());
     (0..patch.len() / dx).into_par_iter().for_each(|r| {
         let (b, c) = (r % dy, r / dy);
+        if !patch.holds(grid, c) {
+            return;
+        }
         for a in 0..dx {
             if patch.phi[r * dx + a] > 0.0 {
                 let n = patch.grid_index(grid, a, b, c);
@@ -377,12 +507,29 @@ fn write_inside(
     });
 }
 
-/// φ_w inside the walls: the value at each wall node's point outside (serial: a few layers of
-/// nodes; the points lie outside the walls, so the order does not matter).
-fn extend_into_walls(grid: &Grid, phi: &mut [f64], wall: &[WallNode]) {
-    for w in wall {
-        phi[w.node] = interpolate(grid, phi, w.from);
-    }
+/// φ_w inside the walls: at each wall node, the value of φ_w before this call (`frozen`, the
+/// whole grid's) at its point outside, so that the result does not depend on the order of
+/// the nodes.
+fn extend_into_walls(grid: &Grid, phi: &mut [f64], frozen: &[f64], wall: &[WallNode]) {
+    let whole_grid = grid.whole();
+    let out = crate::base::grid::SyncPtr(phi.as_mut_ptr());
+    wall.par_iter().for_each(|w| {
+        // SAFETY: every wall node appears once.
+        unsafe { out.write(w.node, interpolate(&whole_grid, frozen, w.from)) };
+    });
+}
+
+/// The moving bodies (with a patch) of the query.
+fn moving<'a>(
+    bodies: impl Iterator<Item = (&'a Body, &'a GridPatch, &'a RigidState, &'a BodyShape)>,
+) -> impl Iterator<Item = MovingBody<'a>> {
+    bodies
+        .filter(|(b, p, ..)| !b.is_static() && !p.is_empty())
+        .map(|(_, patch, state, shape)| MovingBody {
+            patch,
+            state,
+            shape,
+        })
 }
 
 /// The density of the fluid phases from φ_w (before the `density` system adds the bodies).
@@ -393,7 +540,7 @@ pub fn phase_density(
     ls: Res<LiquidLevelSet>,
     mut bf: ResMut<BodyFields>,
     mut scratch: ResMut<FreeSurfaceScratch>,
-    bodies: Query<(&Body, &GridPatch)>,
+    bodies: Bodies,
 ) {
     let Some(fs) = surfaces.iter().next() else {
         return;
@@ -401,16 +548,18 @@ pub fn phase_density(
     let eps = params.numerics.interface_cells * grid.h;
     write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
     // Inside a moving body, the phase it displaces at its pose now: φ_w continued from outside
-    // (see the module doc).
+    // (see the module doc). On several processes the whole grid's φ_w is the one the last
+    // step (or the startup) gathered at its end.
     let (g, d) = (fs.gas_density, fs.liquid_density - fs.gas_density);
     let scratch = &mut *scratch;
-    for (body, patch) in &bodies {
-        if body.is_static() || patch.is_empty() {
-            continue;
-        }
-        extension_values(&grid, patch, &ls.phi, &mut scratch.next, ls.band);
+    let whole = match &scratch.split {
+        Some(s) => &s.whole[..],
+        None => &ls.phi[..],
+    };
+    for body in moving(bodies.iter()) {
+        extension_values(&grid, body, whole, &mut scratch.next, ls.band);
         let next = &scratch.next;
-        write_inside(&grid, patch, &mut bf.rho_phase, |n| {
+        write_inside(&grid, body.patch, &mut bf.rho_phase, |n| {
             g + d * heaviside(next[n], eps)
         });
     }
@@ -429,54 +578,55 @@ pub fn write_phase_density(fs: &FreeSurface, phi: &[f64], eps: f64, rho_phase: &
         });
 }
 
-/// The free surface's step: carry φ_w with the flow, redistance it and restore its volume.
+/// φ_w continued into the walls (from its values now): on one process through a copy of it,
+/// on several through the whole grid's.
+fn walls_step(grid: &Grid, ls: &mut LiquidLevelSet, scratch: &mut FreeSurfaceScratch) {
+    // Without walls (on every process alike: `open` is empty).
+    if scratch.open.is_empty() {
+        return;
+    }
+    let frozen = match &mut scratch.split {
+        Some(s) => {
+            s.gather.whole(&ls.phi, &mut s.whole);
+            &s.whole[..]
+        }
+        None => {
+            scratch.phi0.copy_from_slice(&ls.phi);
+            &scratch.phi0[..]
+        }
+    };
+    extend_into_walls(grid, &mut ls.phi, frozen, &scratch.wall);
+}
+
+/// The free surface's step: φ_w (carried with the mass and momentum by the transport) continued
+/// into the walls and the moving bodies, redistanced and its volume restored.
 pub fn free_surface(
     params: Res<Params>,
     grid: Res<Grid>,
-    time: Res<SimTime>,
-    fields: Res<Fields>,
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
-    bodies: Query<(&Body, &GridPatch)>,
+    bodies: Bodies,
 ) {
     let ls = &mut *ls;
     let scratch = &mut *scratch;
-    // x y z on even steps, z y x on odd ones (second order over two steps).
-    let reverse = time.step % 2 == 1;
-    let axes = split_axes(grid.dim, reverse);
-    let u = &fields.u;
-    // In momentum form the particles of the transport carried φ_w with the mass and momentum.
-    let axes = if params.momentum_form() {
-        &[][..]
-    } else {
-        axes
-    };
-    for &axis in axes {
-        sweep(
-            &grid,
-            axis,
-            time.dt,
-            std::slice::from_mut(&mut ls.phi),
-            &u[axis],
-            0.0,
-            params.numerics.experimental.remesh_kernel,
-            &scratch.pool,
-        );
-    }
-    extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
-    // Inside the moving bodies: the fluid's φ_w continued (see the module doc).
-    for (body, patch) in &bodies {
-        if body.is_static() || patch.is_empty() {
-            continue;
+    walls_step(&grid, ls, scratch);
+    // Inside the moving bodies: the fluid's φ_w continued (see the module doc), every body's
+    // from the same φ_w.
+    if moving(bodies.iter()).next().is_some() {
+        let whole = FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
+        for body in moving(bodies.iter()) {
+            extension_values(&grid, body, whole, &mut scratch.next, ls.band);
         }
-        extension_values(&grid, patch, &ls.phi, &mut scratch.next, ls.band);
         let next = &scratch.next;
-        write_inside(&grid, patch, &mut ls.phi, |n| next[n]);
+        for body in moving(bodies.iter()) {
+            write_inside(&grid, body.patch, &mut ls.phi, |n| next[n]);
+        }
     }
     let eps = params.numerics.interface_cells * grid.h;
     redistance(&grid, ls, scratch, STEP_ITERATIONS, Some(eps));
-    scratch.fill_outside(&grid, bodies.iter());
+    scratch.fill_outside(&grid, bodies.iter().map(|(b, p, ..)| (b, p)));
     restore_volume(&grid, ls, scratch, eps);
+    FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
 }
 
 /// `iterations` pseudo-time steps of the redistancing equation with the Russo-Smereka subcell
@@ -497,10 +647,17 @@ pub fn redistance(
     let hold = -hold_gas.unwrap_or(0.0);
     let band = ls.band;
     scratch.phi0.copy_from_slice(&ls.phi);
+    if let Some(s) = scratch.split.as_mut() {
+        s.halo.fill_one(0, &scratch.phi0);
+    }
     let phi0 = &scratch.phi0;
     let in_wall = &scratch.in_wall;
     let three = dim == 3;
     for _ in 0..iterations {
+        let halo = scratch.split.as_mut().map(|s| {
+            s.halo.fill_one(1, &ls.phi);
+            &s.halo
+        });
         let phi = &ls.phi;
         scratch
             .next
@@ -516,8 +673,8 @@ pub fn redistance(
                 );
                 let (zm, zp) = if three {
                     (
-                        line_at(phi0, rn.below[1], nx),
-                        line_at(phi0, rn.above[1], nx),
+                        z_line(grid, phi0, halo, 0, row, -1),
+                        z_line(grid, phi0, halo, 0, row, 1),
                     )
                 } else {
                     (c0, c0)
@@ -528,7 +685,10 @@ pub fn redistance(
                     line_at(phi, rn.above[0], nx),
                 );
                 let (fzm, fzp) = if three {
-                    (line_at(phi, rn.below[1], nx), line_at(phi, rn.above[1], nx))
+                    (
+                        z_line(grid, phi, halo, 1, row, -1),
+                        z_line(grid, phi, halo, 1, row, 1),
+                    )
                 } else {
                     (f, f)
                 };
@@ -588,20 +748,24 @@ pub fn redistance(
 }
 
 /// ∫(1 - χ)H_ε(φ) dV and ∫(1 - χ)δ_ε(φ) dV outside the walls and bodies (`open` = 1 - χ per
-/// node, empty for none), summed row by row in a fixed order.
+/// node, empty for none) over the whole grid: per row into `partial` (the volume's rows, then
+/// the area's), added by `sums` (in the same order on any number of processes).
 pub fn volume_and_area(
     grid: &Grid,
     phi: &[f64],
     open: &[f32],
-    partial: &mut [[f64; 2]],
+    partial: &mut [f64],
+    sums: &mut RowSums,
     eps: f64,
 ) -> (f64, f64) {
     let nx = grid.n[0];
-    partial
-        .par_iter_mut()
+    let rows = phi.len() / nx;
+    let (pv, pa) = partial.split_at_mut(rows);
+    pv.par_iter_mut()
+        .zip(pa.par_iter_mut())
         .zip(phi.par_chunks(nx))
         .enumerate()
-        .for_each(|(r, (s, row))| {
+        .for_each(|(r, ((sv, sa), row))| {
             let (mut v, mut a) = (0.0, 0.0);
             let open = open.get(r * nx..(r + 1) * nx);
             for (i, &p) in row.iter().enumerate() {
@@ -609,12 +773,10 @@ pub fn volume_and_area(
                 v += w * heaviside(p, eps);
                 a += w * delta(p, eps);
             }
-            *s = [v, a];
+            (*sv, *sa) = (v, a);
         });
     let dv = grid.cell_volume();
-    let (v, a) = partial
-        .iter()
-        .fold((0.0, 0.0), |(v, a), s| (v + s[0], a + s[1]));
+    let (v, a) = (sums.total(pv), sums.total(pa));
     (v * dv, a * dv)
 }
 
@@ -628,6 +790,14 @@ pub fn delta(phi: f64, eps: f64) -> f64 {
     }
 }
 
+/// The liquid's volume and area now, into `ls`.
+fn measure(grid: &Grid, ls: &mut LiquidLevelSet, scratch: &mut FreeSurfaceScratch, eps: f64) {
+    let s = scratch;
+    let (v, a) = volume_and_area(grid, &ls.phi, &s.outside, &mut s.partial, &mut s.sums, eps);
+    ls.volume = v;
+    ls.area = a;
+}
+
 /// Shift φ so that ∫H_ε(φ) dV returns to the target volume (two Newton steps); records the
 /// volume and area.
 pub fn restore_volume(
@@ -637,9 +807,8 @@ pub fn restore_volume(
     eps: f64,
 ) {
     for _ in 0..2 {
-        let (v, a) = volume_and_area(grid, &ls.phi, &scratch.outside, &mut scratch.partial, eps);
-        ls.volume = v;
-        ls.area = a;
+        measure(grid, ls, scratch, eps);
+        let (v, a) = (ls.volume, ls.area);
         if a <= 0.0 {
             return;
         }
@@ -650,9 +819,7 @@ pub fn restore_volume(
                 .for_each(|p| *p = (*p + shift).clamp(-band, band))
         });
     }
-    let (v, a) = volume_and_area(grid, &ls.phi, &scratch.outside, &mut scratch.partial, eps);
-    ls.volume = v;
-    ls.area = a;
+    measure(grid, ls, scratch, eps);
 }
 
 /// Before the first step: redistance the initial level set through the whole band, take its
@@ -664,19 +831,24 @@ pub fn free_surface_init(
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
     mut bf: ResMut<BodyFields>,
-    bodies: Query<(&Body, &GridPatch)>,
+    bodies: Bodies,
 ) {
     let ls = &mut *ls;
+    let scratch = &mut *scratch;
     let eps = params.numerics.interface_cells * grid.h;
-    // The walls: the static bodies' union level set (sampled by `level_sets_init`).
+    // The walls: the static bodies' union level set (sampled by `level_sets_init`); every
+    // process has the same static bodies, so all or none make one.
     let mut phi_s: Option<Vec<f64>> = None;
-    for (body, patch) in &bodies {
-        if !body.is_static() || patch.is_empty() {
+    for (body, patch, ..) in &bodies {
+        if !body.is_static() || !patch.on_grid() {
             continue;
         }
         let phi_s = phi_s.get_or_insert_with(|| vec![f64::NEG_INFINITY; grid.len()]);
         let [dx, dy, dz] = patch.dims;
         for c in 0..dz {
+            if !patch.holds(&grid, c) {
+                continue;
+            }
             for b in 0..dy {
                 for a in 0..dx {
                     let g = patch.grid_index(&grid, a, b, c);
@@ -687,20 +859,26 @@ pub fn free_surface_init(
         }
     }
     scratch.set_walls(&grid, phi_s.as_deref(), eps);
-    scratch.fill_outside(&grid, bodies.iter());
-    extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
+    if let Some(s) = scratch.split.as_mut() {
+        // Which nodes of the whole grid lie inside a wall, for the snapshots.
+        if !scratch.in_wall.is_empty() {
+            let mine: Vec<f64> = scratch.in_wall.iter().map(|&w| w as u8 as f64).collect();
+            s.gather.whole(&mine, &mut s.whole);
+            s.whole_in_wall = s.whole.iter().map(|&w| w > 0.5).collect();
+        }
+    }
+    scratch.fill_outside(&grid, bodies.iter().map(|(b, p, ..)| (b, p)));
+    walls_step(&grid, ls, scratch);
     // A restart holds a redistanced level set and its target: leave both.
     if ls.target_volume == 0.0 {
         let dtau = if grid.dim == 2 { 0.5 } else { 1.0 / 3.0 };
         let its = (3.0 * ls.band / grid.h / dtau).ceil() as usize;
-        redistance(&grid, ls, &mut scratch, its, None);
-        extend_into_walls(&grid, &mut ls.phi, &scratch.wall);
-        let scratch = &mut *scratch;
-        let (v, a) = volume_and_area(&grid, &ls.phi, &scratch.outside, &mut scratch.partial, eps);
-        ls.target_volume = v;
-        ls.volume = v;
-        ls.area = a;
+        redistance(&grid, ls, scratch, its, None);
+        walls_step(&grid, ls, scratch);
+        measure(&grid, ls, scratch, eps);
+        ls.target_volume = ls.volume;
     }
+    FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
     if let Some(fs) = surfaces.iter().next() {
         write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
     }
@@ -721,7 +899,8 @@ impl crate::schedule::Plugin for FreeSurfacePlugin {
             return Ok(());
         }
         let grid = ctx.world.resource::<Grid>().clone();
-        ctx.insert_resource(FreeSurfaceScratch::new(&grid));
+        let split = ctx.world.get_resource::<Decomposition>().cloned();
+        ctx.insert_resource(FreeSurfaceScratch::new(&grid, split.as_ref()));
         ctx.checkpoint_resource::<LiquidLevelSet>("free_surface", 1)?;
         ctx.add_startup_system_in(
             PhysicsSet::PhaseDensity,

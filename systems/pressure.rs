@@ -77,7 +77,7 @@ use crate::bodies::coupling::{ExcessMomentum, PressureState};
 use crate::bodies::integrals::{BodySums, integrate_n, penalized_weight};
 use crate::bodies::{Body, BodyFields, GridPatch, RigidState};
 use crate::parallel::halo::z_line;
-use crate::parallel::{Decomposition, Halo};
+use crate::parallel::{Decomposition, Halo, RowSums, global_max};
 use crate::solvers::Spectral;
 use crate::solvers::operators::{CurlHalo, curl_add};
 use crate::solvers::variable_poisson::{MAX_ITERATIONS, VariablePoisson};
@@ -103,8 +103,13 @@ pub struct PressureSolver {
     /// In momentum form: the reduced gravity's potential g·x - c per node (scratch; empty
     /// otherwise).
     potential: Vec<f64>,
-    /// Per-row partial sums of the potential's interface mean (scratch).
-    potential_partial: Vec<[f64; 2]>,
+    /// Per-row partial sums of the potential's interface mean: the weighted potential's for
+    /// every row, then the weights' (scratch).
+    potential_partial: Vec<f64>,
+    /// The sums of those partials over the whole grid.
+    potential_sums: RowSums,
+    /// On several processes: the split (for the extremes of the phase density).
+    split: Option<Decomposition>,
     /// On several processes: one ghost plane a side of three fields, for the differences
     /// along z.
     halo: Option<Halo>,
@@ -135,10 +140,12 @@ impl PressureSolver {
             },
             potential: if momentum { vec![0.0; n] } else { Vec::new() },
             potential_partial: if momentum {
-                vec![[0.0; 2]; n / grid.n[0]]
+                vec![0.0; 2 * (n / grid.n[0])]
             } else {
                 Vec::new()
             },
+            potential_sums: RowSums::new(grid, split),
+            split: split.cloned(),
         }
     }
 
@@ -295,17 +302,20 @@ fn reduced_potential(
             || (f64::INFINITY, f64::NEG_INFINITY),
             |(a, b), (c, d)| (a.min(c), b.max(d)),
         );
+    let split = solver.split.as_ref();
+    let (lo, hi) = (-global_max(split, -lo), global_max(split, hi));
     let gx = |row: usize, i: usize| {
         let x = grid.pos(i, row % ny, row / ny);
         g[0] * x[0] + g[1] * x[1] + g[2] * x[2]
     };
     // Per row: Σ w g·x and Σ w, summed in row order afterwards.
     let pot = &mut solver.potential;
-    let partial = &mut solver.potential_partial;
+    let rows = pot.len() / nx;
+    let (num_p, den_p) = solver.potential_partial.split_at_mut(rows);
     pot.par_chunks_mut(nx)
-        .zip(partial.par_iter_mut())
+        .zip(num_p.par_iter_mut().zip(den_p.par_iter_mut()))
         .enumerate()
-        .for_each(|(row, (o, part))| {
+        .for_each(|(row, (o, (num, den)))| {
             let ph = &phase[row * nx..(row + 1) * nx];
             let mut sw = [0.0; 2];
             for i in 0..nx {
@@ -315,11 +325,10 @@ fn reduced_potential(
                 sw[0] += w * v;
                 sw[1] += w;
             }
-            *part = sw;
+            (*num, *den) = (sw[0], sw[1]);
         });
-    let (num, den) = partial
-        .iter()
-        .fold((0.0, 0.0), |(a, b), p| (a + p[0], b + p[1]));
+    let num = solver.potential_sums.total(num_p);
+    let den = solver.potential_sums.total(den_p);
     let c = if den > 0.0 { num / den } else { 0.0 };
     pot.par_iter_mut().for_each(|v| *v -= c);
     for (body, patch, _) in bodies {

@@ -270,16 +270,92 @@ const SUBSTEP_CELLS: f64 = 0.9;
 pub struct MomentumScratch {
     carried: Vec<Vec<f64>>,
     pool: CarryPool,
+    /// On several processes: the z sweep's transposes and the reset's ghost planes.
+    split: Option<MomentumSplit>,
+}
+
+/// The momentum form on a slab: the z sweep on whole lines along z in the row layout (as the
+/// vorticity form's, [`SplitScratch`]), and one ghost plane a side of the carried fields and
+/// of Σχ for the reset's neighbours.
+struct MomentumSplit {
+    d: Decomposition,
+    transpose: Transpose,
+    /// The carried fields, the velocity's z component and the bodies' level set in the row
+    /// layout.
+    rows: Vec<Vec<f64>>,
+    packed: Vec<f64>,
+    rows_grid: Grid,
+    /// Ghost planes of ρ̃, q̃ (dim components), φ̃_w and Σχ, in that order.
+    halo: Halo,
 }
 
 impl MomentumScratch {
-    /// Scratch for `grid`.
-    pub fn new(grid: &Grid) -> Self {
-        let nmax = *grid.n.iter().max().unwrap_or(&1);
+    /// Scratch for `grid`, a slab of `split`'s when the run is split.
+    pub fn new(grid: &Grid, split: Option<&Decomposition>) -> Self {
+        let nmax = *grid.n.iter().chain([&grid.nz_whole]).max().unwrap_or(&1);
         let nf = grid.dim + 2;
         MomentumScratch {
             carried: vec![vec![0.0; grid.len()]; nf],
             pool: CarryPool::per_thread(move || CarryScratch::new(nmax, nf)),
+            split: split.map(|d| {
+                let transpose = Transpose::new(&d.slabs, grid.n[0]);
+                let rows = d.slabs.my_rows();
+                let whole = grid.whole();
+                let mut origin = whole.origin;
+                origin[1] += rows.start as f64 * grid.h;
+                MomentumSplit {
+                    d: d.clone(),
+                    rows: vec![vec![0.0; transpose.rows_len()]; nf + 2],
+                    packed: vec![0.0; transpose.slab_len()],
+                    transpose,
+                    rows_grid: Grid::new([grid.n[0], rows.len(), whole.n[2]], grid.h, origin),
+                    halo: Halo::new(grid, d, 1, nf + 1),
+                }
+            }),
+        }
+    }
+}
+
+impl MomentumSplit {
+    /// The carrying sweep along z of the slab's `carried` fields with the velocity's z
+    /// component `uz` and the bodies' level set `solid` (empty without bodies), on whole lines.
+    #[allow(clippy::too_many_arguments)]
+    fn sweep_z(
+        &mut self,
+        dt: f64,
+        carried: &mut [Vec<f64>],
+        uz: &[f64],
+        solid: &[f64],
+        near: Near,
+        pool: &CarryPool,
+    ) {
+        let comm = &*self.d.comm;
+        let nf = carried.len();
+        for (c, f) in carried.iter().enumerate() {
+            self.transpose
+                .forward(comm, f, &mut self.packed, &mut self.rows[c]);
+        }
+        self.transpose
+            .forward(comm, uz, &mut self.packed, &mut self.rows[nf]);
+        if !solid.is_empty() {
+            self.transpose
+                .forward(comm, solid, &mut self.packed, &mut self.rows[nf + 1]);
+        }
+        let (f_rows, rest) = self.rows.split_at_mut(nf);
+        let solid_rows: &[f64] = if solid.is_empty() { &[] } else { &rest[1] };
+        carry_sweep(
+            &self.rows_grid,
+            2,
+            dt,
+            f_rows,
+            &rest[0],
+            solid_rows,
+            near,
+            pool,
+        );
+        for (c, f) in carried.iter_mut().enumerate() {
+            self.transpose
+                .backward(comm, &self.rows[c], &mut self.packed, f);
         }
     }
 }
@@ -353,25 +429,36 @@ pub fn momentum_transport(
     let axes = split_axes(dim, time.step % 2 == 1);
     // The hat kernel leaves a node empty when a particle moves a cell or more: the push is cut
     // into substeps that move no particle more than SUBSTEP_CELLS cells.
-    let umax = crate::solvers::max_norm(&fields.u);
+    let split = scratch.split.as_mut();
+    let umax = global_max(
+        split.as_ref().map(|s| &s.d),
+        crate::solvers::max_norm(&fields.u),
+    );
     let cells = umax * dt / grid.h;
     let nsub = ((cells / SUBSTEP_CELLS).ceil() as usize).max(1);
     let dts = dt / nsub as f64;
+    let mut split = split;
     for _ in 0..nsub {
         for &axis in axes {
-            carry_sweep(
-                &grid,
-                axis,
-                dts,
-                carried,
-                &fields.u[axis],
-                &bf.phi,
-                near,
-                &scratch.pool,
-            );
+            match split.as_mut() {
+                Some(sp) if axis == 2 => {
+                    sp.sweep_z(dts, carried, &fields.u[2], &bf.phi, near, &scratch.pool)
+                }
+                _ => carry_sweep(
+                    &grid,
+                    axis,
+                    dts,
+                    carried,
+                    &fields.u[axis],
+                    &bf.phi,
+                    near,
+                    &scratch.pool,
+                ),
+            }
         }
     }
     // ũ = q̃/ρ̃, ρ̃ the density of the rest of the step, φ_w carried.
+    let carried = &scratch.carried;
     let (rho_c, rest) = carried.split_at(1);
     for a in 0..dim {
         fields.u[a]
@@ -389,7 +476,13 @@ pub fn momentum_transport(
         let (g, d) = (fs.gas_density, fs.liquid_density - fs.gas_density);
         // The density the next step resets from the level set: the mass it moves keeps its
         // momentum (see the module doc).
-        donor_reset(&grid, rho_c, rest, &bf.chi, g, d, eps, &mut fields.u);
+        let halo = split.map(|sp| {
+            for (c, f) in carried.iter().chain([&bf.chi]).enumerate() {
+                sp.halo.fill_one(c, f);
+            }
+            &sp.halo
+        });
+        donor_reset(&grid, carried, &bf.chi, halo, g, d, eps, &mut fields.u);
     }
     bf.rho
         .par_chunks_mut(4096)
@@ -404,60 +497,72 @@ pub fn momentum_transport(
 /// The velocity for the density ρ(φ̃_w) of the next step's reset, outside the bodies: the mass
 /// the reset adds to a node (δ = ρ(φ̃_w) - ρ̃ > 0) comes with the velocity of the nodes around it
 /// that it takes mass from (δ < 0, mass-weighted; with none, the node keeps its momentum), and a
-/// node that gives mass keeps its velocity.
+/// node that gives mass keeps its velocity. `carried` is ρ̃, q̃ (dim components) and φ̃_w; on a
+/// slab, `halo` holds their ghost planes and Σχ's (`chi`), in that order.
 #[allow(clippy::too_many_arguments)]
 fn donor_reset(
     grid: &Grid,
-    rho_c: &[Vec<f64>],
-    rest: &[Vec<f64>],
+    carried: &[Vec<f64>],
     chi: &[f64],
+    halo: Option<&Halo>,
     g: f64,
     d: f64,
     eps: f64,
     u: &mut [Vec<f64>],
 ) {
     let dim = grid.dim;
-    let [nx, ny, nz] = grid.n;
-    let (rho, phi) = (&rho_c[0], &rest[dim]);
-    let delta = |i: usize| {
-        if chi[i] > 0.0 {
-            0.0
-        } else {
-            g + d * heaviside(phi[i], eps) - rho[i]
+    let [nx, ny, _] = grid.n;
+    let (ls, ch) = (dim + 1, dim + 2);
+    // Row `j` of the plane `dk` from row `row`'s, of carried field `f` (Σχ for `ch`).
+    let line = |f: usize, row: usize, j: usize, dk: isize| {
+        let field: &[f64] = if f == ch { chi } else { &carried[f] };
+        let k = row / ny;
+        if dim == 2 {
+            return &field[j * nx..(j + 1) * nx];
         }
+        crate::parallel::halo::z_line(grid, field, halo, f, j + ny * k, dk)
     };
     let up = crate::base::grid::component_ptrs(u);
     let kr: &[isize] = if dim == 3 { &[-1, 0, 1] } else { &[0] };
     (0..grid.len() / nx).into_par_iter().for_each(|row| {
-        let (j, k) = (row % ny, row / ny);
+        let j = row % ny;
+        // The 3 x 3 rows around this one (dk, dj), of ρ̃, φ̃_w and Σχ.
+        let delta = |j: usize, dk: isize, i: usize| {
+            if line(ch, row, j, dk)[i] > 0.0 {
+                0.0
+            } else {
+                g + d * heaviside(line(ls, row, j, dk)[i], eps) - line(0, row, j, dk)[i]
+            }
+        };
         for i in 0..nx {
             let c = i + nx * row;
-            let dc = delta(c);
+            let dc = delta(j, 0, i);
             if dc <= 0.0 {
                 continue;
             }
             let (mut w, mut qd) = (0.0, [0.0; 3]);
             for &dk in kr {
-                let kk = wrap(k, dk, nz);
                 for dj in -1..=1 {
                     let jj = wrap(j, dj, ny);
+                    let rho_n = line(0, row, jj, dk);
                     for di in -1..=1 {
-                        let n = wrap(i, di, nx) + nx * (jj + ny * kk);
-                        let dn = delta(n);
+                        let ii = wrap(i, di, nx);
+                        let dn = delta(jj, dk, ii);
                         if dn < 0.0 {
                             w -= dn;
                             for a in 0..dim {
-                                qd[a] -= dn * rest[a][n] / rho[n];
+                                qd[a] -= dn * line(1 + a, row, jj, dk)[ii] / rho_n[ii];
                             }
                         }
                     }
                 }
             }
+            let (rho, q) = (&carried[0], &carried[1..=dim]);
             let next = rho[c] + dc;
             for a in 0..dim {
                 let add = if w > 0.0 { dc * qd[a] / w } else { 0.0 };
                 // SAFETY: node c belongs to this row's task only.
-                unsafe { up[a].write(c, (rest[a][c] + add) / next) };
+                unsafe { up[a].write(c, (q[a][c] + add) / next) };
             }
         }
     });
@@ -681,7 +786,10 @@ impl crate::schedule::Plugin for TransportPlugin {
         ctx.checkpoint_part::<TransportScratch>("transport", 1)?;
         let momentum = ctx.world.resource::<Params>().momentum_form();
         if ctx.mode().fluid() && momentum {
-            let scratch = MomentumScratch::new(ctx.world.resource::<Grid>());
+            let scratch = MomentumScratch::new(
+                ctx.world.resource::<Grid>(),
+                ctx.world.get_resource::<Decomposition>(),
+            );
             ctx.insert_resource(scratch);
             ctx.add_system(PhysicsSet::Transport, "transport", momentum_transport)?;
         } else if ctx.mode().fluid() {

@@ -350,13 +350,17 @@ fn write_surfaces(
     // The zero level, without its part inside the static walls (the seam of the periodic
     // box runs there).
     let free = world.get_resource::<LiquidLevelSet>().map(|l| {
-        let mut mesh = crate::io::isosurface::zero_level(sim.grid(), &l.phi);
-        let walls = world.get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
-        if let Some(w) = walls
-            .map(|w| w.in_wall())
-            .filter(|w| w.len() == l.phi.len())
-        {
-            crate::io::isosurface::clip(sim.grid(), &mut mesh, |c| w[c]);
+        let scratch = world.get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
+        // On several processes the whole grid's level set, which every process holds.
+        let whole = scratch.and_then(|s| s.whole_level_set());
+        let grid = sim.grid().whole();
+        let (phi, in_wall) = match whole {
+            Some((phi, in_wall)) => (phi, in_wall),
+            None => (&l.phi[..], scratch.map_or(&[][..], |s| s.in_wall())),
+        };
+        let mut mesh = crate::io::isosurface::zero_level(&grid, phi);
+        if in_wall.len() == phi.len() {
+            crate::io::isosurface::clip(&grid, &mut mesh, |c| in_wall[c]);
         }
         mesh
     });

@@ -241,6 +241,28 @@ impl Comm {
         }
     }
 
+    /// Every rank's `mine` laid end to end in rank order into `all` on every rank: rank `r`'s
+    /// values land at `all[displ[r]..][..counts[r]]` (counts and displacements in values,
+    /// [`count`]). One process copies its own.
+    pub fn all_gather<T: Plain>(&self, mine: &[T], all: &mut [T], counts: &[i32], displ: &[i32]) {
+        match &self.inner {
+            Inner::Solo => {
+                let n = mine.len();
+                all[..n].copy_from_slice(mine);
+                let _ = (counts, displ);
+            }
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::collective::CommunicatorCollectives;
+                use mpi::datatype::PartitionMut;
+                let mut r = PartitionMut::new(all, counts, displ);
+                let t0 = std::time::Instant::now();
+                c.all_gather_varcount_into(mine, &mut r);
+                self.count_time(t0);
+            }
+        }
+    }
+
     /// Sends `to_below` to the rank below and `to_above` to the rank above (periodic) and
     /// receives the rank above's `to_below` into `from_above` and the rank below's `to_above`
     /// into `from_below`: a halo exchange along the split axis. With one process the data goes

@@ -33,6 +33,42 @@ impl Decomposition {
     }
 }
 
+/// The whole grid's field from every process's planes of it (an all-gather), for the few
+/// operations that read a field far from a node (the free surface's extensions along a wall's
+/// or a body's normal): per process the planes' counts and offsets, made once.
+#[derive(Debug, Clone)]
+pub struct Gather {
+    d: Decomposition,
+    counts: Vec<i32>,
+    displ: Vec<i32>,
+}
+
+impl Gather {
+    /// The gather of fields of `plane` nodes a z-plane over `d`'s slabs.
+    pub fn new(d: &Decomposition, plane: usize) -> Self {
+        let ranks = d.slabs.ranks;
+        let counts = (0..ranks)
+            .map(|r| crate::parallel::comm::count(d.slabs.planes(r).len() * plane))
+            .collect();
+        let displ = (0..ranks)
+            .map(|r| crate::parallel::comm::count(d.slabs.planes(r).start * plane))
+            .collect();
+        Gather {
+            d: d.clone(),
+            counts,
+            displ,
+        }
+    }
+
+    /// `whole` (the whole grid's length) from this process's planes `mine`, on every process
+    /// together.
+    pub fn whole(&self, mine: &[f64], whole: &mut [f64]) {
+        self.d
+            .comm
+            .all_gather(mine, whole, &self.counts, &self.displ);
+    }
+}
+
 impl Decomposition {
     /// Makes every process's `reason` (why the run must stop, set by the systems of this
     /// process) the same: the lowest rank's that has one, labelled with its rank, or `None`

@@ -28,7 +28,7 @@ pub mod slabs;
 pub mod transpose;
 
 pub use comm::{Comm, Plain};
-pub use decomposition::{Decomposition, global_max, global_sum};
+pub use decomposition::{Decomposition, Gather, global_max, global_sum};
 pub use halo::Halo;
 pub use planes::{PlaneSums, RowSums};
 pub use slabs::{DecompositionError, Slabs, split};

@@ -20,8 +20,10 @@
 //!
 //! Rank 0 also writes the body surfaces (`bodies_NNNNNN.vtp`, `bodies.pvd`).
 //!
-//! Not yet on several processes: free surfaces (refused before anything is written, with the
-//! reason) and the body surfaces' HDF5 form (not written).
+//! With a free surface rank 0 adds its zero level to them, from the whole grid's level set that
+//! every process holds.
+//!
+//! Not yet on several processes: the body surfaces' HDF5 form (not written).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

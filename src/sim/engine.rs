@@ -69,13 +69,6 @@ impl SimulationBuilder {
 /// bodies under another coupling than the default `Pressure`); the grid's split is checked
 /// apart ([`Decomposition::new`]).
 pub fn unsplittable(scene: &ValidScene) -> Option<String> {
-    if scene.free_surface.is_some() {
-        return Some(
-            "this scene has a free surface: on several processes tumble runs flows without one \
-             so far (run it on one process, without mpirun, or with -np 1)"
-                .into(),
-        );
-    }
     let coupling = scene.resolved().params.numerics.body_coupling;
     if !scene.bodies.is_empty() && coupling != crate::base::params::BodyCoupling::Pressure {
         return Some(format!(

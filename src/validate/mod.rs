@@ -222,15 +222,16 @@ pub fn on_processes<R>(comm: std::sync::Arc<crate::parallel::Comm>, f: impl FnOn
 }
 
 /// The builder of a case's simulation of `scene`: split over the processes of
-/// [`on_processes`] where the scene splits (a 3D scene without free surface, whose grid has
-/// planes enough), else whole on every process (the same run on each). A split run is the
-/// whole run bit for bit (README, "On several processes"), so the case's rows are the
-/// one-process rows.
+/// [`on_processes`] where the scene splits (a 3D scene whose grid has planes enough) and has
+/// no free surface (the cases with one measure the liquid's level set over the whole grid),
+/// else whole on every process (the same run on each). A split run is the whole run bit for
+/// bit (README, "On several processes"), so the case's rows are the one-process rows.
 pub fn builder(scene: crate::scene::ValidScene) -> crate::sim::engine::SimulationBuilder {
     let comm = PROCESSES.with(|p| p.borrow().clone());
     let splits = |c: &std::sync::Arc<crate::parallel::Comm>| {
         c.size() > 1
             && scene.grid().dim == 3
+            && scene.free_surface.is_none()
             && crate::sim::engine::unsplittable(&scene).is_none()
             && crate::parallel::Slabs::new(scene.grid().n, c.size(), c.rank()).is_ok()
     };
