@@ -98,9 +98,15 @@ fn split_spectral_allocates_nothing(comm: Arc<tumble::parallel::Comm>) -> f64 {
 /// with its halos and plane sums, transport, the no-slip's markers) allocates nothing once the
 /// run is under way; returns the allocations counted on every process over two steps.
 fn split_body_step_allocates_nothing(comm: Arc<tumble::parallel::Comm>) -> f64 {
+    split_step_allocates_nothing(comm, checks::BODIES)
+}
+
+/// A split step of `scene` allocates nothing once the run is under way; returns the
+/// allocations counted on every process over two steps.
+fn split_step_allocates_nothing(comm: Arc<tumble::parallel::Comm>, scene: &str) -> f64 {
     use tumble::scene::Scene;
     use tumble::sim::engine::Simulation;
-    let scene = Scene::parse(checks::BODIES, "check.ron", "check").expect("scene parses");
+    let scene = Scene::parse(scene, "check.ron", "check").expect("scene parses");
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -164,6 +170,16 @@ const CHECKS: &[Check] = &[
     (
         "periodic_sphere_matches_whole",
         |c| checks::simulation_matches_whole(c, checks::PERIODIC_SPHERE, 12),
+        0.0,
+    ),
+    (
+        "pool_matches_whole",
+        |c| checks::simulation_matches_whole(c, checks::POOL, 8),
+        0.0,
+    ),
+    (
+        "split_pool_step_allocates_nothing",
+        |c| split_step_allocates_nothing(c, checks::POOL),
         0.0,
     ),
     (
@@ -232,6 +248,10 @@ fn main() {
         (
             "a killed process, then --restart, is bit-identical",
             run::killed_and_restarted_is_bit_identical,
+        ),
+        (
+            "a free surface under mpirun matches one process bit for bit, and restarts",
+            run::free_surface_matches_one_process_bit_for_bit,
         ),
         (
             "a scene that cannot split is refused and writes nothing",

@@ -275,6 +275,23 @@ pub const PERIODIC_SPHERE: &str = r#"Scene(
     bodies: [(name: "ball", shape: Sphere(radius: 0.2), density: 2.0, position: [0.5, 0.5, 0.8125])],
 )"#;
 
+/// A pool in a tank (static walls) at the air/water ratio 1:1000, a light and a heavy sphere
+/// dropped into it: the momentum form's transport, the free surface's extensions into the walls
+/// and the spheres (which straddle the processes' slabs on 2 and 3 processes), its
+/// redistancing and volume, and the multigrid-preconditioned pressure solve.
+pub const POOL: &str = r#"Scene(
+    name: "pool",
+    domain: (extent: [1.0, 1.0, 1.5], cells: [24, 24, 36]),
+    fluid: (density: 1.0, viscosity: 0.001, gravity: [0.0, 0.0, -1.0]),
+    free_surface: Some((gas_density: 0.001, liquid: [Below(height: 0.6)])),
+    numerics: (end_time: 1.0),
+    bodies: [
+        (name: "tank", shape: Complement(Box(half_extents: [0.4, 0.4, 0.65])), kind: Static, position: [0.5, 0.5, 0.75]),
+        (name: "light", shape: Sphere(radius: 0.12), density: 0.5, position: [0.35, 0.5, 0.68]),
+        (name: "heavy", shape: Sphere(radius: 0.12), density: 2.0, position: [0.65, 0.5, 0.62]),
+    ],
+)"#;
+
 /// Two runs of a scene on the same processes are the same to the bit: the global quantities
 /// and this process's fields after `steps` steps; returns the number of processes where they
 /// differ (0 expected).

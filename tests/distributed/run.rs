@@ -152,6 +152,54 @@ pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
     Ok(())
 }
 
+/// `checks::POOL` (a tank of water at 1:1000 with a light and a heavy sphere dropped into it)
+/// to t = 0.6, with snapshots and checkpoints every 0.3: on one process and under
+/// `mpirun -np 2` and `-np 3` the same `series.csv` (with the liquid's volume and area),
+/// `bodies.csv`, `contacts.csv` and surfaces (the spheres and the free surface's zero level,
+/// rank 0's from the whole level set) byte for byte, and the snapshots' arrays bit for bit;
+/// then the two-process run restarted from its first checkpoint ends with the same files.
+pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
+    let scene = super::checks::POOL
+        .replace("end_time: 1.0", "end_time: 0.6")
+        .replace(
+            "\n)",
+            "\n    output: (every: 0.3, fields: [Velocity, Density], precision: Double, \
+         checkpoint_every: 0.3),\n)",
+        );
+    let dir = scratch("pool", "pool.ron", &scene)?;
+    run_in(&dir, "pool.ron", 1, "one")?;
+    let files = [
+        "series.csv",
+        "bodies.csv",
+        "contacts.csv",
+        "bodies.pvd",
+        "bodies_000000.vtp",
+        "bodies_000002.vtp",
+    ];
+    for np in [2, 3] {
+        let out = format!("np{np}");
+        run_in(&dir, "pool.ron", np, &out)?;
+        same_files(&dir, "one", &out, &files)?;
+        for snap in 0..3 {
+            let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
+                .map_err(|e| e.to_string())?;
+            let pieces = read_pvti(&dir.join(&out).join(format!("fields_{snap:06}.pvti")))?;
+            compare_exact(&whole, &pieces).map_err(|e| format!("{out} snapshot {snap}: {e}"))?;
+        }
+    }
+    let ck = std::fs::read_dir(dir.join("np2"))
+        .map_err(|e| e.to_string())?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("checkpoint_") && n.ends_with(".bin") && !n.contains("rank"))
+        .min()
+        .ok_or("np2 wrote no checkpoint")?;
+    copy_dir(&dir.join("np2"), &dir.join("full"))?;
+    restart(&dir, dir.join("np2").join(&ck))?;
+    same_files(&dir, "full", "np2", &files).map_err(|e| format!("after the restart: {e}"))?;
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
 /// `tumble validate` of two quick cases (Taylor-Green 3D, which splits, and a vacuum rebound)
 /// under `mpirun -np 2` and on one process: the same report, line for line, but for the wall
 /// times and the plots' directory.
@@ -404,15 +452,15 @@ pub fn killed_and_restarted_is_bit_identical() -> Result<(), String> {
     Ok(())
 }
 
-/// A scene that cannot split (a free surface) under `mpirun -np 2`: exit status 2, no run
-/// directory.
+/// A scene that cannot split (bodies coupled by the baroclinic term) under `mpirun -np 2`: exit
+/// status 2, no run directory.
 pub fn unsplittable_scene_is_refused_and_writes_nothing() -> Result<(), String> {
     let tumble = env!("CARGO_BIN_EXE_tumble");
     let scene = r#"Scene(
     domain: (extent: [1.0, 1.0, 1.0], cells: [16, 16, 16]),
     fluid: (viscosity: 0.01, gravity: [0.0, 0.0, -9.8]),
-    free_surface: Some((gas_density: 0.01, liquid: [Below(height: 0.5)])),
-    numerics: (end_time: 0.01),
+    numerics: (end_time: 0.01, body_coupling: Baroclinic),
+    bodies: [(name: "ball", shape: Sphere(radius: 0.2), density: 2.0, position: [0.5, 0.5, 0.5])],
 )"#;
     let dir = scratch("refused", "ball.ron", scene)?;
     let st = mpirun(2)

@@ -43,6 +43,10 @@ fn one_process_checks() {
         0.0
     );
     assert_eq!(
+        checks::simulation_matches_whole(solo(), checks::POOL, 2),
+        0.0
+    );
+    assert_eq!(
         checks::split_runs_are_bit_identical(solo(), checks::VORTEX_RING, 2),
         0.0
     );
