@@ -241,6 +241,38 @@ impl Comm {
         }
     }
 
+    /// All-gather with counts: every rank's `send` (`counts[r]` values on rank `r`) lands on
+    /// every rank at `recv[displs[r]..][..counts[r]]`, in rank order (MPI's all-gather-v; a
+    /// copy of the data, so every rank holds the same bits). One process copies `send`.
+    pub fn all_gather_varcount(
+        &self,
+        send: &[f64],
+        recv: &mut [f64],
+        counts: &[i32],
+        displs: &[i32],
+    ) {
+        assert_eq!(
+            send.len(),
+            counts[self.rank()] as usize,
+            "all_gather_varcount: this rank sends its count"
+        );
+        match &self.inner {
+            Inner::Solo => {
+                let d = displs[0] as usize;
+                recv[d..d + send.len()].copy_from_slice(send);
+            }
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::collective::CommunicatorCollectives;
+                use mpi::datatype::PartitionMut;
+                let mut r = PartitionMut::new(recv, counts, displs);
+                let t0 = std::time::Instant::now();
+                c.all_gather_varcount_into(send, &mut r);
+                self.count_time(t0);
+            }
+        }
+    }
+
     /// Sends `to_below` to the rank below and `to_above` to the rank above (periodic) and
     /// receives the rank above's `to_below` into `from_above` and the rank below's `to_above`
     /// into `from_below`: a halo exchange along the split axis. With one process the data goes
