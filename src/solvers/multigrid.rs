@@ -28,6 +28,30 @@
 //! checks both on every kind of coarsening), so it preconditions CG. Every update of a node
 //! reads only nodes of the other colour (or the last sweep's values), and the coarsest sweeps
 //! run in one thread: the result does not depend on the thread count.
+//!
+//! On several processes ([`Multigrid::split`]) each holds its slab of z-planes of r and z, and
+//! the cycle gives the bits of the one-process cycle on the whole grid, so that a run is
+//! bit-identical on any number of processes:
+//!
+//! - Distributed levels: a level stays split while it is not the coarsest, every process holds
+//!   two planes or more of it and every slab starts on an aggregate of its coarsening along z
+//!   (never inside one, nor inside the wider last one). Then the restriction of a process's
+//!   planes gives whole planes of the next level, which it holds in turn; the coarse
+//!   coefficients are coarsened from the process's own fine nodes. The smoother, the residual
+//!   and the inverse diagonal read one ghost plane of the iterate a side and the z-face
+//!   coefficients of the plane below, exchanged with the neighbours before each red-black
+//!   colour pass (the colour taken from the whole grid's plane index), each Jacobi sweep and
+//!   the restriction. Every node is computed from the same values with the same terms in the
+//!   same order as on the whole grid: a colour pass reads only the other colour, which is what
+//!   the one-process sweep (both colours fused in one pass through memory) computes too.
+//! - Gathered levels: from the first level that cannot stay split every process gathers that
+//!   level's right-hand side (and, once, its coefficients) in rank order
+//!   ([`crate::parallel::Comm::all_gather_varcount`]), runs the rest of the cycle whole with
+//!   the one-process code, and takes its planes of the correction. Coarse levels are small,
+//!   so the redundant work is cheap, and the coarsest level's sequential sweeps need the
+//!   whole level anyway. Slabs that start inside an aggregate of the finest coarsening (odd
+//!   plane counts on uneven slabs) gather the finest level: the result is the same, the work
+//!   that of one process.
 
 use crate::base::grid::{Grid, RowNeighbours, SyncPtr, periodic_neighbours};
 use crate::parallel::comm::count;
