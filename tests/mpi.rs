@@ -95,14 +95,9 @@ fn split_spectral_allocates_nothing(comm: Arc<tumble::parallel::Comm>) -> f64 {
 }
 
 /// A split step of a scene with bodies (level sets, contact, penalization, the pressure solve
-/// with its halos and plane sums, transport, the no-slip's markers) allocates nothing once the
-/// run is under way; returns the allocations counted on every process over two steps.
-fn split_body_step_allocates_nothing(comm: Arc<tumble::parallel::Comm>) -> f64 {
-    split_step_allocates_nothing(comm, checks::BODIES)
-}
-
-/// A split step of `scene` allocates nothing once the run is under way; returns the
-/// allocations counted on every process over two steps.
+/// with its halos and plane sums and, at a density ratio of 5 or more, the split multigrid
+/// hierarchy, transport, the no-slip's markers) allocates nothing once the run is under way;
+/// returns the allocations counted on every process over two steps.
 fn split_step_allocates_nothing(comm: Arc<tumble::parallel::Comm>, scene: &str) -> f64 {
     use tumble::scene::Scene;
     use tumble::sim::engine::Simulation;
@@ -184,7 +179,47 @@ const CHECKS: &[Check] = &[
     ),
     (
         "split_body_step_allocates_nothing",
-        split_body_step_allocates_nothing,
+        |c| split_step_allocates_nothing(c, checks::BODIES),
+        0.0,
+    ),
+    (
+        "split_multigrid_step_allocates_nothing",
+        |c| split_step_allocates_nothing(c, &checks::dense_bodies()),
+        0.0,
+    ),
+    (
+        "multigrid_matches_whole_red_black",
+        |c| checks::multigrid_matches_whole(c, [16, 12, 48]),
+        0.0,
+    ),
+    (
+        "multigrid_matches_whole_odd",
+        |c| checks::multigrid_matches_whole(c, [16, 12, 23]),
+        0.0,
+    ),
+    (
+        "multigrid_matches_whole_by_three",
+        |c| checks::multigrid_matches_whole(c, [18, 18, 45]),
+        0.0,
+    ),
+    (
+        "multigrid_matches_whole_unaligned",
+        |c| checks::multigrid_matches_whole(c, [16, 12, 26]),
+        0.0,
+    ),
+    (
+        "variable_poisson_matches_whole",
+        |c| checks::variable_poisson_matches_whole(c, [16, 12, 48]),
+        0.0,
+    ),
+    (
+        "variable_poisson_matches_whole_odd",
+        |c| checks::variable_poisson_matches_whole(c, [16, 12, 23]),
+        0.0,
+    ),
+    (
+        "dense_bodies_match_whole_bit_for_bit",
+        |c| checks::multigrid_scene_matches_whole_bit_for_bit(c, &checks::dense_bodies(), 12),
         0.0,
     ),
     (

@@ -241,23 +241,33 @@ impl Comm {
         }
     }
 
-    /// Every rank's `mine` laid end to end in rank order into `all` on every rank: rank `r`'s
-    /// values land at `all[displ[r]..][..counts[r]]` (counts and displacements in values,
-    /// [`count`]). One process copies its own.
-    pub fn all_gather<T: Plain>(&self, mine: &[T], all: &mut [T], counts: &[i32], displ: &[i32]) {
+    /// All-gather with counts: every rank's `send` (`counts[r]` values on rank `r`) lands on
+    /// every rank at `recv[displs[r]..][..counts[r]]`, in rank order (MPI's all-gather-v; a
+    /// copy of the data, so every rank holds the same bits). One process copies `send`.
+    pub fn all_gather_varcount(
+        &self,
+        send: &[f64],
+        recv: &mut [f64],
+        counts: &[i32],
+        displs: &[i32],
+    ) {
+        assert_eq!(
+            send.len(),
+            counts[self.rank()] as usize,
+            "all_gather_varcount: this rank sends its count"
+        );
         match &self.inner {
             Inner::Solo => {
-                let n = mine.len();
-                all[..n].copy_from_slice(mine);
-                let _ = (counts, displ);
+                let d = displs[0] as usize;
+                recv[d..d + send.len()].copy_from_slice(send);
             }
             #[cfg(feature = "mpi")]
             Inner::Mpi(c) => {
                 use mpi::collective::CommunicatorCollectives;
                 use mpi::datatype::PartitionMut;
-                let mut r = PartitionMut::new(all, counts, displ);
+                let mut r = PartitionMut::new(recv, counts, displs);
                 let t0 = std::time::Instant::now();
-                c.all_gather_varcount_into(mine, &mut r);
+                c.all_gather_varcount_into(send, &mut r);
                 self.count_time(t0);
             }
         }

@@ -65,7 +65,7 @@ impl Gather {
     pub fn whole(&self, mine: &[f64], whole: &mut [f64]) {
         self.d
             .comm
-            .all_gather(mine, whole, &self.counts, &self.displ);
+            .all_gather_varcount(mine, whole, &self.counts, &self.displ);
     }
 }
 

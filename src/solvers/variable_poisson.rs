@@ -7,16 +7,17 @@
 //!
 //! On several processes each holds its slab of every vector: the operator reads one ghost plane
 //! of the iterate and of β a side ([`Halo`]), the dot products are added over the processes in
-//! rank order and the FFT preconditioner is the split one. The multigrid hierarchy is not built
-//! there (its coarse levels would need gathering): the FFT preconditioner then serves every
-//! contrast, in more iterations (45 instead of 7 at 1:1000, see [`MULTIGRID_CONTRAST`]).
+//! rank order, the FFT preconditioner is the split one and the multigrid hierarchy the split one
+//! ([`Multigrid::split`]), so a solve gives the one-process solve's bits whatever the
+//! preconditioner.
 
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::parallel::halo::z_line;
-use crate::parallel::{Decomposition, Halo, RowSums};
+use crate::parallel::{Comm, Decomposition, Halo, RowSums};
 use crate::solvers::Spectral;
 use crate::solvers::multigrid::Multigrid;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Iteration cap of the solve.
 pub const MAX_ITERATIONS: usize = 2000;
@@ -76,6 +77,8 @@ pub struct VariablePoisson {
     pub residual: f64,
     /// On several processes: the ghost planes of the iterate (0) and of β along z (1).
     split: Option<Halo>,
+    /// On several processes: their communicator (for the contrast over the whole grid).
+    comm: Option<Arc<Comm>>,
     /// The sums over the rows (the same on any number of processes).
     sums: RowSums,
 }
@@ -87,7 +90,8 @@ impl VariablePoisson {
     /// ([`crate::solvers::multigrid::coarsens_fully`]).
     pub fn new(grid: &Grid, multigrid: bool, split: Option<&Decomposition>) -> Self {
         let n = grid.len();
-        let multigrid = multigrid && split.is_none();
+        // Decided on the whole grid, the same on every process.
+        let multigrid = multigrid && crate::solvers::multigrid::coarsens_fully(&grid.whole());
         VariablePoisson {
             beta: vec![vec![0.0; n]; grid.dim],
             rhs: vec![0.0; n],
@@ -95,12 +99,15 @@ impl VariablePoisson {
             p: vec![0.0; n],
             ap: vec![0.0; n],
             partial: vec![0.0; n / grid.n[0]],
-            multigrid: (multigrid && crate::solvers::multigrid::coarsens_fully(grid))
-                .then(|| Multigrid::new(grid)),
+            multigrid: multigrid.then(|| match split {
+                Some(d) if d.slabs.ranks > 1 => Multigrid::split(grid, d),
+                _ => Multigrid::new(grid),
+            }),
             preconditioner: Preconditioner::Spectral,
             iterations: 0,
             residual: 0.0,
             split: split.map(|d| Halo::new(grid, d, 1, 2)),
+            comm: split.map(|d| d.comm.clone()),
             sums: RowSums::new(grid, split),
         }
     }
@@ -151,7 +158,8 @@ impl VariablePoisson {
     }
 
     /// The preconditioner for the β set now: multigrid if the solver has its hierarchy and
-    /// max β / min β ≥ [`MULTIGRID_CONTRAST`], else the FFT inverse.
+    /// max β / min β ≥ [`MULTIGRID_CONTRAST`] over the whole grid, else the FFT inverse (the
+    /// same on every process, which call it together).
     ///
     /// Whether it has the hierarchy: [`VariablePoisson::has_multigrid`].
     pub fn choose(&self) -> Preconditioner {
@@ -170,6 +178,14 @@ impl VariablePoisson {
                 || (f64::INFINITY, 0.0f64),
                 |a, b| (a.0.min(b.0), a.1.max(b.1)),
             );
+        let (lo, hi) = match &self.comm {
+            Some(c) => {
+                let mut v = [-lo, hi];
+                c.max(&mut v);
+                (-v[0], v[1])
+            }
+            None => (lo, hi),
+        };
         if hi >= MULTIGRID_CONTRAST * lo {
             Preconditioner::Multigrid
         } else {

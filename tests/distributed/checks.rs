@@ -321,3 +321,180 @@ pub fn split_runs_are_bit_identical(comm: Arc<Comm>, scene: &str, steps: usize) 
     let differ = run() != run();
     comm.sum_one(f64::from(u8::from(differ)))
 }
+
+/// A density field with a 1:1000 jump: "water" (1000) below 0.4 of the box's height along z
+/// and in a ball, "air" (1) elsewhere, each node varied by up to ±20% (deterministic).
+fn water_and_air(grid: &Grid) -> Vec<f64> {
+    let [nx, ny, nz] = grid.n;
+    (0..grid.len())
+        .map(|c| {
+            let (i, j, k) = (c % nx, (c / nx) % ny, c / grid.plane());
+            let d = [
+                i as f64 - 0.6 * nx as f64,
+                j as f64 - 0.45 * ny as f64,
+                k as f64 - 0.7 * nz as f64,
+            ];
+            let ball = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() < 0.2 * nz as f64;
+            let r = ((c * 2654435761 + 12345) % 1000003) as f64 / 1000003.0 - 0.5;
+            let rho = if (k as f64) < 0.4 * nz as f64 || ball {
+                1000.0
+            } else {
+                1.0
+            };
+            rho * (1.0 + 0.4 * r)
+        })
+        .collect()
+}
+
+/// β = 1/ρ̄ on the faces toward +x, +y, +z, ρ̄ the mean of the face's two nodes (the pressure
+/// system's rule), stored at the lower node, on the whole grid.
+fn face_beta(grid: &Grid, rho: &[f64]) -> Vec<Vec<f64>> {
+    let n = grid.n;
+    (0..3)
+        .map(|a| {
+            (0..grid.len())
+                .map(|c| {
+                    let mut q = [c % n[0], (c / n[0]) % n[1], c / grid.plane()];
+                    q[a] = (q[a] + 1) % n[a];
+                    2.0 / (rho[c] + rho[grid.idx(q[0], q[1], q[2])])
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The values of `a` whose bits differ from `b`'s.
+fn differing(a: &[f64], b: &[f64]) -> usize {
+    a.iter()
+        .zip(b)
+        .filter(|(x, y)| x.to_bits() != y.to_bits())
+        .count()
+        + a.len().abs_diff(b.len())
+}
+
+/// The split multigrid V-cycle ([`Multigrid::split`], from this process's planes of β at a
+/// 1:1000 contrast) applied to two rough fields gives the whole grid's V-cycle on this
+/// process's planes, bit for bit; returns the number of differing values over every process
+/// (0 expected).
+pub fn multigrid_matches_whole(comm: Arc<Comm>, n: [usize; 3]) -> f64 {
+    use tumble::parallel::Decomposition;
+    use tumble::solvers::multigrid::Multigrid;
+    let grid = Grid::new(n, 1.0 / n[0] as f64, [0.0; 3]);
+    let beta = face_beta(&grid, &water_and_air(&grid));
+    let mut whole = Multigrid::new(&grid);
+    whole.set_coefficients(&beta);
+    let d = Decomposition::new(&grid, comm.clone()).expect("grid splits");
+    let local = d.local_grid(&grid);
+    let planes = d.slabs.my_planes();
+    let mine = |v: &Vec<f64>| local_planes(&grid, v, planes.clone());
+    let mut split = Multigrid::split(&local, &d);
+    split.set_coefficients(&beta.iter().map(mine).collect::<Vec<_>>());
+    let mut wrong = 0;
+    for seed in [5, 6] {
+        let r = field(&grid, seed);
+        let mut z = vec![0.0; grid.len()];
+        whole.apply(&r, &mut z);
+        let mut zl = vec![1.0; local.len()];
+        split.apply(&mine(&r), &mut zl);
+        wrong += differing(&zl, &mine(&z));
+    }
+    comm.sum_one(wrong as f64)
+}
+
+/// The variable-coefficient Poisson solve preconditioned by the split multigrid (β at a
+/// 1:1000 contrast) gives the whole grid's solve bit for bit: the same iterations, residual
+/// and φ on this process's planes; returns the number of differing values over every process
+/// (0 expected; infinite if either solve was not preconditioned by multigrid).
+pub fn variable_poisson_matches_whole(comm: Arc<Comm>, n: [usize; 3]) -> f64 {
+    use tumble::parallel::Decomposition;
+    use tumble::solvers::Spectral;
+    use tumble::solvers::variable_poisson::{Preconditioner, VariablePoisson};
+    let grid = Grid::new(n, 1.0 / n[0] as f64, [0.0; 3]);
+    let beta = face_beta(&grid, &water_and_air(&grid));
+    let rhs = field(&grid, 8);
+    let solve = |grid: &Grid, d: Option<&Decomposition>, mine: &dyn Fn(&Vec<f64>) -> Vec<f64>| {
+        let mut vp = VariablePoisson::new(grid, true, d);
+        vp.beta = beta.iter().map(mine).collect();
+        vp.fill_beta_halo(grid);
+        vp.rhs = mine(&rhs);
+        let with = vp.choose();
+        let mut phi = vec![0.0; grid.len()];
+        let mut spectral = Spectral::of_grid(grid, d);
+        let (it, res) = vp.solve(grid, &mut phi, &mut spectral, with, 1e-7);
+        (vp.preconditioner, it, res, phi)
+    };
+    let (pw, iw, rw, phi_w) = solve(&grid, None, &|v: &Vec<f64>| v.clone());
+    let d = Decomposition::new(&grid, comm.clone()).expect("grid splits");
+    let local = d.local_grid(&grid);
+    let planes = d.slabs.my_planes();
+    let mine = |v: &Vec<f64>| local_planes(&grid, v, planes.clone());
+    let (ps, is, rs, phi_s) = solve(&local, Some(&d), &mine);
+    if pw != Preconditioner::Multigrid || ps != Preconditioner::Multigrid {
+        return f64::INFINITY;
+    }
+    let wrong = differing(&phi_s, &mine(&phi_w))
+        + usize::from(iw != is)
+        + usize::from(rw.to_bits() != rs.to_bits());
+    comm.sum_one(wrong as f64)
+}
+
+/// [`BODIES`] with a sphere of density 10 as well: the densities span a ratio of 10, so the
+/// pressure solve is preconditioned by multigrid.
+pub fn dense_bodies() -> String {
+    BODIES.replace(
+        "\n    ],",
+        "\n        (name: \"dense\", shape: Sphere(radius: 0.1), density: 10.0, position: [0.3, 0.7, 1.6]),\n    ],",
+    )
+}
+
+/// A scene stepped on the processes of `comm` gives one process's run bit for bit: every
+/// step's global quantities and, after `steps` steps, this process's planes of ω and u;
+/// returns the number of differing values over every process (0 expected; infinite if the
+/// scene's pressure solve has no multigrid hierarchy, which this check is about).
+pub fn multigrid_scene_matches_whole_bit_for_bit(
+    comm: Arc<Comm>,
+    scene: &str,
+    steps: usize,
+) -> f64 {
+    use tumble::scene::Scene;
+    use tumble::sim::engine::Simulation;
+    let parse = || Scene::parse(scene, "check.ron", "check").expect("scene parses");
+    if !parse().resolved().params.multigrid {
+        return f64::INFINITY;
+    }
+    let mut whole = Simulation::new(parse()).expect("whole simulation builds");
+    let mut split = Simulation::builder(parse())
+        .on_processes(comm.clone())
+        .build()
+        .expect("split simulation builds");
+    let sample = |s: &Simulation| {
+        let s = s.sample();
+        [
+            s.energy,
+            s.enstrophy,
+            s.circulation,
+            s.max_omega,
+            s.max_u,
+            s.dt,
+            s.t,
+        ]
+    };
+    let mut wrong = 0;
+    for _ in 0..steps {
+        whole.step().expect("whole step");
+        split.step().expect("split step");
+        wrong += differing(&sample(&whole), &sample(&split));
+    }
+    let grid = whole.grid().clone();
+    let planes = split.grid().k0..split.grid().k0 + split.grid().n[2];
+    let (fw, fs) = (whole.fields(), split.fields());
+    for (a, b) in fw
+        .omega()
+        .iter()
+        .zip(fs.omega())
+        .chain(fw.u.iter().zip(&fs.u))
+    {
+        wrong += differing(b, &local_planes(&grid, a, planes.clone()));
+    }
+    comm.sum_one(wrong as f64)
+}

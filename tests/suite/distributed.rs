@@ -25,6 +25,17 @@ fn one_process_checks() {
         0.0
     );
     assert_eq!(checks::sums_are_identical_everywhere(solo()), 0.0);
+    for n in [[16, 12, 48], [16, 12, 23], [18, 18, 45], [16, 12, 26]] {
+        assert_eq!(checks::multigrid_matches_whole(solo(), n), 0.0, "{n:?}");
+    }
+    assert_eq!(
+        checks::variable_poisson_matches_whole(solo(), [16, 12, 23]),
+        0.0
+    );
+    assert_eq!(
+        checks::multigrid_scene_matches_whole_bit_for_bit(solo(), &checks::dense_bodies(), 2),
+        0.0
+    );
     // One process runs unsplit: the builder's path with a communicator changes nothing.
     assert_eq!(
         checks::simulation_matches_whole(solo(), checks::TAYLOR_GREEN, 2),
@@ -73,6 +84,45 @@ fn split_engine_on_one_process_is_the_engine_bit_for_bit() {
         a.inverse(Some(&sa), &mut sa.clone(), &mut ra);
         b.inverse(None, &mut sb, &mut rb);
         assert!(ra == rb, "{n:?}: inverses differ");
+    }
+}
+
+/// The split hierarchy distributes the levels while every slab starts on an aggregate along z
+/// and holds two planes or more, and gathers the rest: on one process every level but the
+/// coarsest is distributed (and `one_process_checks` finds its cycle the whole grid's, bit for
+/// bit, on every kind of coarsening).
+#[test]
+fn split_multigrid_distributes_the_levels_it_can() {
+    use tumble::parallel::Decomposition;
+    use tumble::solvers::multigrid::{Multigrid, distributed_levels};
+    for n in [[16, 12, 48], [16, 12, 23], [18, 18, 45]] {
+        let grid = Grid::new(n, 0.1, [0.0; 3]);
+        let d = Decomposition::new(&grid, solo()).unwrap();
+        let mg = Multigrid::split(&grid, &d);
+        let whole = Multigrid::new(&grid);
+        assert_eq!(mg.level_sizes(), whole.level_sizes(), "{n:?}");
+        assert_eq!(
+            mg.distributed_levels(),
+            whole.level_sizes().len() - 1,
+            "{n:?}"
+        );
+    }
+    // Three processes on 23 planes (8, 8, 7): the slabs start on aggregates of 2 (planes 8
+    // and 16, then 4 and 8 of the 11 of level 1); level 2 (5 planes) would leave the last
+    // process one plane and is gathered. On 26 planes (9, 9, 8) the slabs start inside
+    // aggregates: every process holds the whole hierarchy. 45 planes coarsen by 3: on three
+    // processes (15 each) level 1's slabs (5 planes) start inside its aggregates of 3, on two
+    // (23, 22) already level 0's do.
+    for (n, ranks, dist) in [
+        ([16, 12, 48], 2, 2),
+        ([16, 12, 48], 3, 2),
+        ([16, 12, 23], 2, 2),
+        ([16, 12, 23], 3, 2),
+        ([16, 12, 26], 3, 0),
+        ([18, 18, 45], 3, 1),
+        ([18, 18, 45], 2, 0),
+    ] {
+        assert_eq!(distributed_levels(n, ranks), dist, "{n:?} on {ranks}");
     }
 }
 
