@@ -519,12 +519,13 @@ fn extend_into_walls(grid: &Grid, phi: &mut [f64], frozen: &[f64], wall: &[WallN
     });
 }
 
-/// The moving bodies (with a patch) of the query.
+/// The moving bodies of the query whose box holds grid nodes: the same on every process, also
+/// where a body does not reach a process's slab (which then gathers with the others).
 fn moving<'a>(
     bodies: impl Iterator<Item = (&'a Body, &'a GridPatch, &'a RigidState, &'a BodyShape)>,
 ) -> impl Iterator<Item = MovingBody<'a>> {
     bodies
-        .filter(|(b, p, ..)| !b.is_static() && !p.is_empty())
+        .filter(|(b, p, ..)| !b.is_static() && p.on_grid())
         .map(|(_, patch, state, shape)| MovingBody {
             patch,
             state,
