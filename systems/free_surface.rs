@@ -77,7 +77,7 @@
 //! level set beyond the slab's part of its patch is evaluated from its shape, as its sampling
 //! does. The results are the one-process results bit for bit.
 
-use crate::base::fields::Params;
+use crate::base::fields::{Params, SimTime};
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::kernels::heaviside;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
@@ -147,6 +147,10 @@ struct SplitLevelSet {
     whole: Vec<f64>,
     /// Whether each node of the whole grid lies inside a wall (for the snapshots).
     whole_in_wall: Vec<bool>,
+    /// The step whose phase density `whole` is for (the next one's, gathered at the end of a
+    /// step or at startup); a restart, which replaces the level set after the startup, finds
+    /// another step and gathers again.
+    fresh_for: Option<u64>,
 }
 
 impl FreeSurfaceScratch {
@@ -180,6 +184,7 @@ impl FreeSurfaceScratch {
                 halo: Halo::new(grid, d, 1, 2),
                 whole: vec![0.0; grid.whole().len()],
                 whole_in_wall: Vec::new(),
+                fresh_for: None,
             }),
         }
     }
@@ -537,6 +542,7 @@ fn moving<'a>(
 pub fn phase_density(
     params: Res<Params>,
     grid: Res<Grid>,
+    time: Res<SimTime>,
     surfaces: Query<&FreeSurface>,
     ls: Res<LiquidLevelSet>,
     mut bf: ResMut<BodyFields>,
@@ -550,11 +556,16 @@ pub fn phase_density(
     write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
     // Inside a moving body, the phase it displaces at its pose now: φ_w continued from outside
     // (see the module doc). On several processes the whole grid's φ_w is the one the last
-    // step (or the startup) gathered at its end.
+    // step (or the startup) gathered at its end, unless a restart has replaced it since.
     let (g, d) = (fs.gas_density, fs.liquid_density - fs.gas_density);
     let scratch = &mut *scratch;
-    let whole = match &scratch.split {
-        Some(s) => &s.whole[..],
+    let whole = match &mut scratch.split {
+        Some(s) => {
+            if s.fresh_for != Some(time.step) {
+                s.gather.whole(&ls.phi, &mut s.whole);
+            }
+            &s.whole[..]
+        }
         None => &ls.phi[..],
     };
     for body in moving(bodies.iter()) {
@@ -604,6 +615,7 @@ fn walls_step(grid: &Grid, ls: &mut LiquidLevelSet, scratch: &mut FreeSurfaceScr
 pub fn free_surface(
     params: Res<Params>,
     grid: Res<Grid>,
+    time: Res<SimTime>,
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
     bodies: Bodies,
@@ -628,6 +640,9 @@ pub fn free_surface(
     scratch.fill_outside(&grid, bodies.iter().map(|(b, p, ..)| (b, p)));
     restore_volume(&grid, ls, scratch, eps);
     FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
+    if let Some(s) = scratch.split.as_mut() {
+        s.fresh_for = Some(time.step + 1);
+    }
 }
 
 /// `iterations` pseudo-time steps of the redistancing equation with the Russo-Smereka subcell
@@ -828,6 +843,7 @@ pub fn restore_volume(
 pub fn free_surface_init(
     params: Res<Params>,
     grid: Res<Grid>,
+    time: Res<SimTime>,
     surfaces: Query<&FreeSurface>,
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
@@ -880,6 +896,9 @@ pub fn free_surface_init(
         ls.target_volume = ls.volume;
     }
     FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
+    if let Some(s) = scratch.split.as_mut() {
+        s.fresh_for = Some(time.step);
+    }
     if let Some(fs) = surfaces.iter().next() {
         write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
     }

@@ -97,6 +97,13 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
             per_node += 4.0 * levels + 2.0 * (levels - 1.0);
         }
     }
+    let free_surface = scene.free_surface.is_some();
+    if free_surface {
+        // The liquid's level set, the free surface's φ⁰ and Jacobi buffer, 1 - χ of the walls
+        // and of every body (f32 each), the walls' mask (bytes); the momentum form's carried
+        // fields (ρ, q, φ_w); the pressure's rigid-wall density and reduced potential.
+        per_node += 3.0 + 1.0 + 0.125 + (d + 2.0) + 2.0;
+    }
     if flow {
         // Spectral: ω̂ per component and a work buffer, (nx/2 + 1) complex per nx reals.
         let nx = g.n[0] as f64;
@@ -367,7 +374,15 @@ pub fn split_estimate(scene: &ValidScene, processes: usize) -> SplitEstimate {
     let planes = (g.n[2].div_ceil(processes), (g.n[2] / processes).max(1));
     let local = whole.nodes * planes.0 as f64 / g.n[2] as f64;
     let per_node = (whole.bytes - BASE_BYTES) / whole.nodes;
-    let bytes_per_process = BASE_BYTES + local * (per_node + 8.0 * SPLIT_DOUBLES_PER_NODE);
+    let mut bytes_per_process = BASE_BYTES + local * (per_node + 8.0 * SPLIT_DOUBLES_PER_NODE);
+    if scene.free_surface.is_some() {
+        // The whole grid's level set and walls' mask on every process (`free_surface`), and
+        // the momentum form's z sweep in the row layout: its d + 2 carried fields, the
+        // velocity's z component and the bodies' level set, d more than the vorticity form's
+        // four counted above.
+        let d = g.dim as f64;
+        bytes_per_process += whole.nodes * (8.0 + 1.0) + local * 8.0 * d;
+    }
     let kept = 1.0 / processes as f64;
     let nxh = (g.n[0] / 2 + 1) as f64;
     let half_spectrum = 16.0 * nxh * (local / g.n[0] as f64);
