@@ -539,6 +539,7 @@ fn moving<'a>(
 }
 
 /// The density of the fluid phases from φ_w (before the `density` system adds the bodies).
+#[allow(clippy::too_many_arguments)]
 pub fn phase_density(
     params: Res<Params>,
     grid: Res<Grid>,
@@ -840,6 +841,7 @@ pub fn restore_volume(
 
 /// Before the first step: redistance the initial level set through the whole band, take its
 /// volume as the one to keep, and set the phases' density.
+#[allow(clippy::too_many_arguments)]
 pub fn free_surface_init(
     params: Res<Params>,
     grid: Res<Grid>,
