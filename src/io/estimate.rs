@@ -62,6 +62,8 @@ pub struct Estimate {
     pub nodes: f64,
     /// Σ over bodies of their grid patches' nodes.
     pub patch_nodes: f64,
+    /// Σ over bodies of the nodes of their own (body-frame) level sets.
+    pub local_nodes: f64,
 }
 
 /// Nodes of a box of the given side lengths at spacing `h` (at least 2 per axis), `dim` axes.
@@ -155,6 +157,7 @@ pub fn estimate(scene: &ValidScene) -> Estimate {
         seconds_per_step: seconds,
         nodes: n,
         patch_nodes,
+        local_nodes,
     }
 }
 
@@ -373,8 +376,12 @@ pub fn split_estimate(scene: &ValidScene, processes: usize) -> SplitEstimate {
     let slabs = crate::parallel::Slabs::new(g.n, processes, 0);
     let planes = (g.n[2].div_ceil(processes), (g.n[2] / processes).max(1));
     let local = whole.nodes * planes.0 as f64 / g.n[2] as f64;
-    let per_node = (whole.bytes - BASE_BYTES) / whole.nodes;
-    let mut bytes_per_process = BASE_BYTES + local * (per_node + 8.0 * SPLIT_DOUBLES_PER_NODE);
+    // The grid's fields and the bodies' patches are split; every process holds every body's
+    // own level set whole.
+    let bodies_own = 8.0 * whole.local_nodes;
+    let per_node = (whole.bytes - BASE_BYTES - bodies_own) / whole.nodes;
+    let mut bytes_per_process =
+        BASE_BYTES + bodies_own + local * (per_node + 8.0 * SPLIT_DOUBLES_PER_NODE);
     if scene.free_surface.is_some() {
         // The whole grid's level set and walls' mask on every process (`free_surface`), and
         // the momentum form's z sweep in the row layout: its d + 2 carried fields, the
