@@ -55,6 +55,10 @@
 //! at 128³). There is no stretching term (it is part of ∇·(ρu ⊗ u)). The density is reset from
 //! the level sets at the start of the next step (`density`), as IBAMR does (Nangia et al.,
 //! J. Comput. Phys. 2019), since carried by the hat kernel it would spread a little every step.
+//! On several processes its z sweep runs on whole lines in the row layout as the vorticity's
+//! does (the carried fields, the velocity's z component and the bodies' level set transposed
+//! there), and the reset below reads one ghost plane a side: the one-process results bit for
+//! bit.
 //!
 //! The reset moves mass without its momentum wherever the remeshed density ρ̃ and the one the
 //! level set gives, ρ(φ̃_w), differ: in the light fringe of the interface, which carries the
