@@ -77,7 +77,7 @@
 //! level set beyond the slab's part of its patch is evaluated from its shape, as its sampling
 //! does. The results are the one-process results bit for bit.
 
-use crate::base::fields::{Params, SimTime};
+use crate::base::fields::Params;
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};
 use crate::base::kernels::heaviside;
 use crate::bodies::free_surface::{FreeSurface, LiquidLevelSet};
@@ -129,43 +129,86 @@ pub struct FreeSurfaceScratch {
     /// 1 - χ_s - Σχ_i per node with the moving bodies at their current pose (empty without
     /// any body): the weight of the liquid volume that is kept.
     outside: Vec<f32>,
-    /// On several processes: φ_w of the whole grid (gathered, the same on every process) and
-    /// the halo and gather that make it.
+    /// On several processes: the ghost planes the stencils and the extensions read.
     split: Option<SplitLevelSet>,
 }
 
-/// The free surface on a slab. The extensions into the walls and the bodies read φ_w at points
-/// along a normal, up to a body's depth away: they read the whole grid's φ_w, gathered from
-/// every process (one field on each); the redistancing reads one ghost plane a side.
+/// The free surface on a slab: the redistancing reads one ghost plane a side; the extensions
+/// into the walls and the bodies read φ_w at points along a normal, up to the deepest wall's or
+/// body's reach away, through [`Far`].
 struct SplitLevelSet {
-    gather: Gather,
-    /// Ghost planes of φ⁰ (or the walls' level set at startup) and φ.
+    d: Decomposition,
+    /// One ghost plane a side of φ⁰ (or the walls' level set at startup) and φ.
     halo: Halo,
-    /// The whole grid's φ_w: after the transport for the walls, after the walls for the
-    /// bodies, and at the end of the step (for the next step's phase density and the
-    /// snapshots).
-    whole: Vec<f64>,
-    /// Whether each node of the whole grid lies inside a wall (for the snapshots).
-    whole_in_wall: Vec<bool>,
-    /// The step whose phase density `whole` is for (the next one's, gathered at the end of a
-    /// step or at startup); a restart, which replaces the level set after the startup, finds
-    /// another step and gathers again.
-    fresh_for: Option<u64>,
+    /// What the extensions read beyond the slab (set at startup).
+    far: Far,
+}
+
+/// φ_w beyond a slab for the extensions.
+enum Far {
+    /// Before the startup has measured the reach.
+    Unset,
+    /// `w` ghost planes a side: the deepest reach of the walls' and the bodies' extensions,
+    /// measured at startup (a wall's points are fixed; a rigid body's depth is its own).
+    Planes(Halo, usize),
+    /// The whole grid's φ_w, gathered from every process: where that reach is wider than the
+    /// thinnest slab.
+    Whole(Gather, Vec<f64>),
+}
+
+/// φ_w as the extensions read it: this process's planes `phi`, and beyond them (several
+/// processes) the ghost planes or the whole grid's copy that [`FreeSurfaceScratch::view`]
+/// filled.
+#[derive(Clone, Copy)]
+struct View<'a> {
+    grid: &'a Grid,
+    phi: &'a [f64],
+    far: FarView<'a>,
+}
+
+#[derive(Clone, Copy)]
+enum FarView<'a> {
+    /// One process: `phi` is the whole grid.
+    Local,
+    Planes(&'a Halo, usize),
+    Whole(&'a [f64]),
+}
+
+impl View<'_> {
+    /// φ_w at node (i, j) (wrapped) of the whole grid's plane `k` (unwrapped).
+    #[inline]
+    fn at(&self, i: usize, j: usize, k: isize) -> f64 {
+        let g = self.grid;
+        let nzw = g.nz_whole as isize;
+        match self.far {
+            FarView::Local => self.phi[g.idx(i, j, k.rem_euclid(nzw) as usize)],
+            FarView::Whole(w) => w[i + g.n[0] * (j + g.n[1] * k.rem_euclid(nzw) as usize)],
+            FarView::Planes(h, w) => {
+                let (w, nz) = (w as isize, g.n[2] as isize);
+                let mut kl = k - g.k0 as isize;
+                if kl < -w || kl >= nz + w {
+                    kl = (kl + w).rem_euclid(nzw) - w;
+                }
+                debug_assert!(
+                    kl >= -w && kl < nz + w,
+                    "free surface: plane {k} beyond the reach"
+                );
+                plane(g, self.phi, Some(h), 0, kl)[i + g.n[0] * j]
+            }
+        }
+    }
+
+    /// φ_w at the slab's node `c`.
+    #[inline]
+    fn local(&self, c: usize) -> f64 {
+        self.phi[c]
+    }
 }
 
 impl FreeSurfaceScratch {
     /// Per node, whether it lies inside a static wall (empty without walls).
     pub fn in_wall(&self) -> &[bool] {
         &self.in_wall
-    }
-
-    /// On several processes: the whole grid's φ_w and which of its nodes lie inside a wall
-    /// (empty without walls), as of the end of the last step (`None` on one process, where
-    /// the level set itself is whole).
-    pub fn whole_level_set(&self) -> Option<(&[f64], &[bool])> {
-        self.split
-            .as_ref()
-            .map(|s| (&s.whole[..], &s.whole_in_wall[..]))
     }
 
     /// Scratch for `grid`, a slab of `split`'s when the run is split.
@@ -180,25 +223,63 @@ impl FreeSurfaceScratch {
             open: Vec::new(),
             outside: Vec::new(),
             split: split.map(|d| SplitLevelSet {
-                gather: Gather::new(d, grid.plane()),
+                d: d.clone(),
                 halo: Halo::new(grid, d, 1, 2),
-                whole: vec![0.0; grid.whole().len()],
-                whole_in_wall: Vec::new(),
-                fresh_for: None,
+                far: Far::Unset,
             }),
         }
     }
 
-    /// φ_w of the whole grid, `phi` (this process's planes) on one process, gathered from
-    /// every process when split (all of them call it together).
-    fn whole<'a>(split: &'a mut Option<SplitLevelSet>, phi: &'a [f64]) -> &'a [f64] {
-        match split {
-            Some(s) => {
-                s.gather.whole(phi, &mut s.whole);
-                &s.whole
+    /// The view of `phi` (this process's planes) the extensions read: on several processes
+    /// with its planes beyond the slab filled (every process calls it together).
+    fn view<'a>(split: &'a mut Option<SplitLevelSet>, grid: &'a Grid, phi: &'a [f64]) -> View<'a> {
+        let far = match split.as_mut().map(|s| &mut s.far) {
+            None => FarView::Local,
+            Some(Far::Planes(h, w)) => {
+                h.fill_one(0, phi);
+                FarView::Planes(h, *w)
             }
-            None => phi,
+            Some(Far::Whole(g, whole)) => {
+                g.whole(phi, whole);
+                FarView::Whole(whole)
+            }
+            Some(Far::Unset) => unreachable!("free surface: the reach is set at startup"),
+        };
+        View { grid, phi, far }
+    }
+
+    /// On several processes, the ghost planes of the extensions: as many as the deepest point
+    /// a wall's node or a moving body's copies from (a body's depth and two cells, one more for
+    /// a pose whose nodes sample the body deeper than the startup's), or the whole grid's
+    /// φ_w where that is more than the thinnest slab holds.
+    fn set_reach<'a>(&mut self, grid: &Grid, bodies: impl Iterator<Item = MovingBody<'a>>) {
+        let Some(s) = self.split.as_mut() else {
+            return;
+        };
+        let h = grid.h;
+        let mut reach = 1.0f64;
+        for w in &self.wall {
+            let k = (w.node / grid.plane() + grid.k0) as f64;
+            reach = reach.max((w.from[2] - k).abs().floor() + 2.0);
         }
+        for b in bodies {
+            let depth = b.patch.phi.iter().fold(0.0f64, |m, &p| m.max(p));
+            reach = reach.max((depth / h).ceil() + 4.0);
+        }
+        let reach = s.d.comm.max_one(reach) as usize;
+        let slabs = &s.d.slabs;
+        let thinnest = (0..slabs.ranks)
+            .map(|r| slabs.planes(r).len())
+            .min()
+            .unwrap_or(0);
+        s.far = if reach <= thinnest {
+            Far::Planes(Halo::new(grid, &s.d, reach, 1), reach)
+        } else {
+            Far::Whole(
+                Gather::new(&s.d, grid.plane()),
+                vec![0.0; grid.whole().len()],
+            )
+        };
     }
 
     /// The weight of the kept liquid volume, 1 - χ_s - Σχ_i (at least 0), with the moving
@@ -325,17 +406,22 @@ impl FreeSurfaceScratch {
     }
 }
 
-/// φ at the point `x` in grid units from the origin (multilinear, periodic) of the whole grid
-/// `grid` (`phi` one value per node).
-fn interpolate(grid: &Grid, phi: &[f64], x: [f64; 3]) -> f64 {
-    let mut idx = [[0usize; 2]; 3];
+/// φ_w at the point `x` in grid units from the whole grid's origin (multilinear, periodic).
+fn interpolate(view: &View, x: [f64; 3]) -> f64 {
+    let grid = view.grid;
+    let mut idx = [[0isize; 2]; 3];
     let mut w = [[1.0, 0.0]; 3];
     for a in 0..grid.dim {
         let f = x[a].floor();
         let t = x[a] - f;
-        let n = grid.n[a] as isize;
-        let i0 = (f as isize).rem_euclid(n) as usize;
-        idx[a] = [i0, (i0 + 1) % grid.n[a]];
+        if a < 2 {
+            let n = grid.n[a] as isize;
+            let i0 = (f as isize).rem_euclid(n);
+            idx[a] = [i0, (i0 + 1) % n];
+        } else {
+            // Along z the planes of the whole grid, unwrapped (the view wraps them).
+            idx[a] = [f as isize, f as isize + 1];
+        }
         w[a] = [1.0 - t, t];
     }
     let mut v = 0.0;
@@ -344,7 +430,7 @@ fn interpolate(grid: &Grid, phi: &[f64], x: [f64; 3]) -> f64 {
             for a in 0..2 {
                 let wt = w[0][a] * w[1][b] * w[2][c];
                 if wt != 0.0 {
-                    v += wt * phi[grid.idx(idx[0][a], idx[1][b], idx[2][c])];
+                    v += wt * view.at(idx[0][a] as usize, idx[1][b] as usize, idx[2][c]);
                 }
             }
         }
@@ -437,17 +523,15 @@ fn outward_normal(grid: &Grid, body: MovingBody, q: [usize; 3], p: f64) -> Optio
 /// The fluid's φ_w continued into one body: for each node of its patch inside it (φ_b > 0), the
 /// value of the linear extrapolation along the outward normal n from the point
 /// x_s = x + (φ_b + h) n just outside, φ_w(x_s) - (φ_b + h) (φ_w(x_s + h n) - φ_w(x_s)) / h,
-/// clipped to ±`band`, is written into `next` (the slab's nodes), read from `whole` (the whole
-/// grid's φ_w, left unchanged).
-fn extension_values(grid: &Grid, body: MovingBody, whole: &[f64], next: &mut [f64], band: f64) {
+/// clipped to ±`band`, is written into `next` (the slab's nodes), read from `view` (left
+/// unchanged).
+fn extension_values(grid: &Grid, body: MovingBody, view: &View, next: &mut [f64], band: f64) {
     let patch = body.patch;
     let [dx, dy, _] = patch.dims;
     if patch.is_empty() {
         return;
     }
     let h = grid.h;
-    let whole_grid = grid.whole();
-    let k0 = grid.k0;
     let out = crate::base::grid::SyncPtr(next.as_mut_ptr());
     (0..patch.len() / dx).into_par_iter().for_each(|r| {
         let (b, c) = (r % dy, r / dy);
@@ -463,7 +547,7 @@ fn extension_values(grid: &Grid, body: MovingBody, whole: &[f64], next: &mut [f6
             let Some(n) = outward_normal(grid, body, [a, b, c], p) else {
                 // No direction out of the body here: the node's own value.
                 // SAFETY: distinct patch nodes map to distinct grid nodes.
-                unsafe { out.write(g, whole[g + k0 * grid.plane()]) };
+                unsafe { out.write(g, view.local(g)) };
                 continue;
             };
             let s = (p + h) / h;
@@ -475,10 +559,7 @@ fn extension_values(grid: &Grid, body: MovingBody, whole: &[f64], next: &mut [f6
             ];
             let xs = [i[0] + s * n[0], i[1] + s * n[1], i[2] + s * n[2]];
             let x1 = [xs[0] + n[0], xs[1] + n[1], xs[2] + n[2]];
-            let (f0, f1) = (
-                interpolate(&whole_grid, whole, xs),
-                interpolate(&whole_grid, whole, x1),
-            );
+            let (f0, f1) = (interpolate(view, xs), interpolate(view, x1));
             // SAFETY: distinct patch nodes map to distinct grid nodes.
             unsafe { out.write(g, (f0 - s * (f1 - f0)).clamp(-band, band)) };
         }
@@ -512,15 +593,13 @@ fn write_inside(
     });
 }
 
-/// φ_w inside the walls: at each wall node, the value of φ_w before this call (`frozen`, the
-/// whole grid's) at its point outside, so that the result does not depend on the order of
-/// the nodes.
-fn extend_into_walls(grid: &Grid, phi: &mut [f64], frozen: &[f64], wall: &[WallNode]) {
-    let whole_grid = grid.whole();
+/// φ_w inside the walls: at each wall node, the value of φ_w before this call (`frozen`) at its
+/// point outside, so that the result does not depend on the order of the nodes.
+fn extend_into_walls(phi: &mut [f64], frozen: &View, wall: &[WallNode]) {
     let out = crate::base::grid::SyncPtr(phi.as_mut_ptr());
     wall.par_iter().for_each(|w| {
         // SAFETY: every wall node appears once.
-        unsafe { out.write(w.node, interpolate(&whole_grid, frozen, w.from)) };
+        unsafe { out.write(w.node, interpolate(frozen, w.from)) };
     });
 }
 
@@ -539,11 +618,9 @@ fn moving<'a>(
 }
 
 /// The density of the fluid phases from φ_w (before the `density` system adds the bodies).
-#[allow(clippy::too_many_arguments)]
 pub fn phase_density(
     params: Res<Params>,
     grid: Res<Grid>,
-    time: Res<SimTime>,
     surfaces: Query<&FreeSurface>,
     ls: Res<LiquidLevelSet>,
     mut bf: ResMut<BodyFields>,
@@ -556,21 +633,15 @@ pub fn phase_density(
     let eps = params.numerics.interface_cells * grid.h;
     write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);
     // Inside a moving body, the phase it displaces at its pose now: φ_w continued from outside
-    // (see the module doc). On several processes the whole grid's φ_w is the one the last
-    // step (or the startup) gathered at its end, unless a restart has replaced it since.
+    // (see the module doc).
+    if moving(bodies.iter()).next().is_none() {
+        return;
+    }
     let (g, d) = (fs.gas_density, fs.liquid_density - fs.gas_density);
     let scratch = &mut *scratch;
-    let whole = match &mut scratch.split {
-        Some(s) => {
-            if s.fresh_for != Some(time.step) {
-                s.gather.whole(&ls.phi, &mut s.whole);
-            }
-            &s.whole[..]
-        }
-        None => &ls.phi[..],
-    };
+    let view = FreeSurfaceScratch::view(&mut scratch.split, &grid, &ls.phi);
     for body in moving(bodies.iter()) {
-        extension_values(&grid, body, whole, &mut scratch.next, ls.band);
+        extension_values(&grid, body, &view, &mut scratch.next, ls.band);
         let next = &scratch.next;
         write_inside(&grid, body.patch, &mut bf.rho_phase, |n| {
             g + d * heaviside(next[n], eps)
@@ -591,24 +662,15 @@ pub fn write_phase_density(fs: &FreeSurface, phi: &[f64], eps: f64, rho_phase: &
         });
 }
 
-/// φ_w continued into the walls (from its values now): on one process through a copy of it,
-/// on several through the whole grid's.
+/// φ_w continued into the walls (from its values now, through a copy of them).
 fn walls_step(grid: &Grid, ls: &mut LiquidLevelSet, scratch: &mut FreeSurfaceScratch) {
     // Without walls (on every process alike: `open` is empty).
     if scratch.open.is_empty() {
         return;
     }
-    let frozen = match &mut scratch.split {
-        Some(s) => {
-            s.gather.whole(&ls.phi, &mut s.whole);
-            &s.whole[..]
-        }
-        None => {
-            scratch.phi0.copy_from_slice(&ls.phi);
-            &scratch.phi0[..]
-        }
-    };
-    extend_into_walls(grid, &mut ls.phi, frozen, &scratch.wall);
+    scratch.phi0.copy_from_slice(&ls.phi);
+    let frozen = FreeSurfaceScratch::view(&mut scratch.split, grid, &scratch.phi0);
+    extend_into_walls(&mut ls.phi, &frozen, &scratch.wall);
 }
 
 /// The free surface's step: φ_w (carried with the mass and momentum by the transport) continued
@@ -616,7 +678,6 @@ fn walls_step(grid: &Grid, ls: &mut LiquidLevelSet, scratch: &mut FreeSurfaceScr
 pub fn free_surface(
     params: Res<Params>,
     grid: Res<Grid>,
-    time: Res<SimTime>,
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
     bodies: Bodies,
@@ -627,9 +688,9 @@ pub fn free_surface(
     // Inside the moving bodies: the fluid's φ_w continued (see the module doc), every body's
     // from the same φ_w.
     if moving(bodies.iter()).next().is_some() {
-        let whole = FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
+        let view = FreeSurfaceScratch::view(&mut scratch.split, &grid, &ls.phi);
         for body in moving(bodies.iter()) {
-            extension_values(&grid, body, whole, &mut scratch.next, ls.band);
+            extension_values(&grid, body, &view, &mut scratch.next, ls.band);
         }
         let next = &scratch.next;
         for body in moving(bodies.iter()) {
@@ -640,10 +701,6 @@ pub fn free_surface(
     redistance(&grid, ls, scratch, STEP_ITERATIONS, Some(eps));
     scratch.fill_outside(&grid, bodies.iter().map(|(b, p, ..)| (b, p)));
     restore_volume(&grid, ls, scratch, eps);
-    FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
-    if let Some(s) = scratch.split.as_mut() {
-        s.fresh_for = Some(time.step + 1);
-    }
 }
 
 /// `iterations` pseudo-time steps of the redistancing equation with the Russo-Smereka subcell
@@ -841,11 +898,9 @@ pub fn restore_volume(
 
 /// Before the first step: redistance the initial level set through the whole band, take its
 /// volume as the one to keep, and set the phases' density.
-#[allow(clippy::too_many_arguments)]
 pub fn free_surface_init(
     params: Res<Params>,
     grid: Res<Grid>,
-    time: Res<SimTime>,
     surfaces: Query<&FreeSurface>,
     mut ls: ResMut<LiquidLevelSet>,
     mut scratch: ResMut<FreeSurfaceScratch>,
@@ -878,14 +933,7 @@ pub fn free_surface_init(
         }
     }
     scratch.set_walls(&grid, phi_s.as_deref(), eps);
-    if let Some(s) = scratch.split.as_mut() {
-        // Which nodes of the whole grid lie inside a wall, for the snapshots.
-        if !scratch.in_wall.is_empty() {
-            let mine: Vec<f64> = scratch.in_wall.iter().map(|&w| w as u8 as f64).collect();
-            s.gather.whole(&mine, &mut s.whole);
-            s.whole_in_wall = s.whole.iter().map(|&w| w > 0.5).collect();
-        }
-    }
+    scratch.set_reach(&grid, moving(bodies.iter()));
     scratch.fill_outside(&grid, bodies.iter().map(|(b, p, ..)| (b, p)));
     walls_step(&grid, ls, scratch);
     // A restart holds a redistanced level set and its target: leave both.
@@ -896,10 +944,6 @@ pub fn free_surface_init(
         walls_step(&grid, ls, scratch);
         measure(&grid, ls, scratch, eps);
         ls.target_volume = ls.volume;
-    }
-    FreeSurfaceScratch::whole(&mut scratch.split, &ls.phi);
-    if let Some(s) = scratch.split.as_mut() {
-        s.fresh_for = Some(time.step);
     }
     if let Some(fs) = surfaces.iter().next() {
         write_phase_density(fs, &ls.phi, eps, &mut bf.rho_phase);

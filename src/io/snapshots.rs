@@ -251,7 +251,7 @@ impl Snapshots {
         }
         let mut surfaces = None;
         if let Some(series) = self.surfaces.as_mut() {
-            let (file, g) = write_surfaces(series, self.count, sim)?;
+            let (file, g) = write_surfaces(series, self.count, sim, None)?;
             written.push(file);
             surfaces = Some(g);
         }
@@ -313,13 +313,64 @@ pub fn split_surfaces(dir: &Path, sim: &Simulation) -> Option<SurfaceSeries> {
     surface_series(dir, sim)
 }
 
-/// Writes snapshot `index` of the body surfaces of a split run (rank 0); returns the file.
+/// Writes snapshot `index` of the body surfaces of a split run (rank 0), with a free surface
+/// its zero level from `whole` (gathered by [`WholeLevelSet::gather`]); returns the file.
 pub fn write_split_surfaces(
     series: &mut SurfaceSeries,
     index: usize,
     sim: &Simulation,
+    whole: Option<&WholeLevelSet>,
 ) -> anyhow::Result<String> {
-    write_surfaces(series, index, sim).map(|(file, _)| file)
+    write_surfaces(series, index, sim, whole).map(|(file, _)| file)
+}
+
+/// The whole grid's liquid level set and walls' mask on rank 0 of a split run with a free
+/// surface, for the zero level in the body surfaces: every process sends its planes at each
+/// snapshot (rank 0 alone holds the whole grid's).
+pub struct WholeLevelSet {
+    gather: crate::parallel::Gather,
+    phi: Vec<f64>,
+    in_wall: Vec<f64>,
+    /// This process's walls' mask as values (scratch).
+    mine: Vec<f64>,
+}
+
+impl WholeLevelSet {
+    /// For a split run of `sim` with a free surface (`None` otherwise).
+    pub fn new(sim: &Simulation) -> Option<Self> {
+        let d = sim.world.get_resource::<crate::parallel::Decomposition>()?;
+        sim.world.get_resource::<LiquidLevelSet>()?;
+        let grid = sim.grid();
+        let whole = if d.comm.is_root() {
+            grid.whole().len()
+        } else {
+            0
+        };
+        Some(WholeLevelSet {
+            gather: crate::parallel::Gather::new(d, grid.plane()),
+            phi: vec![0.0; whole],
+            in_wall: vec![0.0; whole],
+            mine: Vec::new(),
+        })
+    }
+
+    /// Gathers the level set and the walls' mask now onto rank 0 (every process together).
+    pub fn gather(&mut self, sim: &Simulation) {
+        let world = &sim.world;
+        if let Some(l) = world.get_resource::<LiquidLevelSet>() {
+            self.gather.to_root(&l.phi, &mut self.phi);
+        }
+        let walls = world.get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
+        let in_wall = walls.map_or(&[][..], |w| w.in_wall());
+        // Every process has walls or none (the same static bodies).
+        if !in_wall.is_empty() {
+            self.mine.clear();
+            self.mine.extend(in_wall.iter().map(|&w| w as u8 as f64));
+            self.gather.to_root(&self.mine, &mut self.in_wall);
+        } else {
+            self.in_wall.clear();
+        }
+    }
 }
 
 /// Snapshot `index` of the bodies' surfaces, each at its pose with its velocity, angular
@@ -330,6 +381,7 @@ fn write_surfaces(
     series: &mut SurfaceSeries,
     index: usize,
     sim: &Simulation,
+    whole: Option<&WholeLevelSet>,
 ) -> anyhow::Result<(String, SurfaceGeometry)> {
     let world = &sim.world;
     let mut bodies: Vec<_> = world
@@ -350,17 +402,25 @@ fn write_surfaces(
     // The zero level, without its part inside the static walls (the seam of the periodic
     // box runs there).
     let free = world.get_resource::<LiquidLevelSet>().map(|l| {
-        let scratch = world.get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
-        // On several processes the whole grid's level set, which every process holds.
-        let whole = scratch.and_then(|s| s.whole_level_set());
         let grid = sim.grid().whole();
-        let (phi, in_wall) = match whole {
-            Some((phi, in_wall)) => (phi, in_wall),
-            None => (&l.phi[..], scratch.map_or(&[][..], |s| s.in_wall())),
-        };
-        let mut mesh = crate::io::isosurface::zero_level(&grid, phi);
-        if in_wall.len() == phi.len() {
-            crate::io::isosurface::clip(&grid, &mut mesh, |c| in_wall[c]);
+        let mut mesh;
+        match whole {
+            // On several processes the whole grid's level set, gathered for this snapshot.
+            Some(w) => {
+                mesh = crate::io::isosurface::zero_level(&grid, &w.phi);
+                if w.in_wall.len() == w.phi.len() {
+                    crate::io::isosurface::clip(&grid, &mut mesh, |c| w.in_wall[c] > 0.5);
+                }
+            }
+            None => {
+                let scratch =
+                    world.get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
+                let in_wall = scratch.map_or(&[][..], |s| s.in_wall());
+                mesh = crate::io::isosurface::zero_level(&grid, &l.phi);
+                if in_wall.len() == l.phi.len() {
+                    crate::io::isosurface::clip(&grid, &mut mesh, |c| in_wall[c]);
+                }
+            }
         }
         mesh
     });

@@ -273,6 +273,33 @@ impl Comm {
         }
     }
 
+    /// Gather with counts to rank 0: every rank's `send` (`counts[r]` values on rank `r`) lands
+    /// at `recv[displs[r]..][..counts[r]]` on rank 0, whose `recv` is as long as all of them;
+    /// the other ranks' `recv` is not touched (may be empty). One process copies `send`.
+    pub fn gather_varcount(&self, send: &[f64], recv: &mut [f64], counts: &[i32], displs: &[i32]) {
+        match &self.inner {
+            Inner::Solo => {
+                let d = displs[0] as usize;
+                recv[d..d + send.len()].copy_from_slice(send);
+            }
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(c) => {
+                use mpi::collective::Root;
+                use mpi::datatype::PartitionMut;
+                use mpi::topology::Communicator;
+                let root = c.process_at_rank(0);
+                let t0 = std::time::Instant::now();
+                if self.rank() == 0 {
+                    let mut r = PartitionMut::new(recv, counts, displs);
+                    root.gather_varcount_into_root(send, &mut r);
+                } else {
+                    root.gather_varcount_into(send);
+                }
+                self.count_time(t0);
+            }
+        }
+    }
+
     /// Sends `to_below` to the rank below and `to_above` to the rank above (periodic) and
     /// receives the rank above's `to_below` into `from_above` and the rank below's `to_above`
     /// into `from_below`: a halo exchange along the split axis. With one process the data goes

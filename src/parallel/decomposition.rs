@@ -60,6 +60,14 @@ impl Gather {
         }
     }
 
+    /// `whole` (the whole grid's length) on rank 0 from every process's planes `mine` (the
+    /// other processes' `whole` may be empty), on every process together.
+    pub fn to_root(&self, mine: &[f64], whole: &mut [f64]) {
+        self.d
+            .comm
+            .gather_varcount(mine, whole, &self.counts, &self.displ);
+    }
+
     /// `whole` (the whole grid's length) from this process's planes `mine`, on every process
     /// together.
     pub fn whole(&self, mine: &[f64], whole: &mut [f64]) {

@@ -60,6 +60,8 @@ struct Outputs {
     hdf5: Option<SplitHdf5>,
     /// The body surfaces, `bodies_NNNNNN.vtp` and `bodies.pvd` (rank 0, a scene with bodies).
     surfaces: Option<SurfaceSeries>,
+    /// With a free surface: its level set gathered onto rank 0 for the surfaces (every process).
+    level_set: Option<crate::io::snapshots::WholeLevelSet>,
     /// Snapshots written.
     count: usize,
     next_out: Option<f64>,
@@ -131,6 +133,7 @@ pub fn run_split(
         } else {
             None
         },
+        level_set: crate::io::snapshots::WholeLevelSet::new(&sim),
         count: 0,
         next_out: every.map(|e| e.min(end)),
         next_ckpt: scene.output.checkpoint_every,
@@ -273,6 +276,7 @@ pub fn restart_split(
         vtk: vtk(&sim),
         hdf5,
         surfaces,
+        level_set: crate::io::snapshots::WholeLevelSet::new(&sim),
         count: p.snapshots as usize,
         next_out: p.next_out,
         next_ckpt: scene
@@ -384,8 +388,16 @@ impl Outputs {
         if let Some(h) = self.hdf5.as_mut() {
             h.snapshot(&self.dir, self.count, sim)?;
         }
+        if let Some(l) = self.level_set.as_mut() {
+            l.gather(sim);
+        }
         if let Some(s) = self.surfaces.as_mut() {
-            crate::io::snapshots::write_split_surfaces(s, self.count, sim)?;
+            crate::io::snapshots::write_split_surfaces(
+                s,
+                self.count,
+                sim,
+                self.level_set.as_ref(),
+            )?;
         }
         if self.vtk || self.hdf5.is_some() || self.surfaces.is_some() {
             self.count += 1;
