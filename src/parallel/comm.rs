@@ -281,6 +281,7 @@ impl Comm {
             Inner::Solo => {
                 let d = displs[0] as usize;
                 recv[d..d + send.len()].copy_from_slice(send);
+                let _ = counts;
             }
             #[cfg(feature = "mpi")]
             Inner::Mpi(c) => {
