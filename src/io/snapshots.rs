@@ -325,14 +325,15 @@ pub fn write_split_surfaces(
     hdf5: Option<&mut SplitHdf5>,
 ) -> anyhow::Result<Vec<String>> {
     let (file, g) = write_surfaces(series, index, sim)?;
-    let mut written = vec![file];
     #[cfg(feature = "hdf5")]
     if let Some(h) = hdf5.and_then(|h| h.root.as_mut()) {
+        let mut written = vec![file];
         written.extend(h.surfaces(dir, index, sim, &g)?);
+        return Ok(written);
     }
     #[cfg(not(feature = "hdf5"))]
     let _ = (dir, hdf5, g);
-    Ok(written)
+    Ok(vec![file])
 }
 
 /// Snapshot `index` of the bodies' surfaces, each at its pose with its velocity, angular

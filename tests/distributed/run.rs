@@ -156,8 +156,9 @@ pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
 /// to t = 0.6, with snapshots and checkpoints every 0.3: on one process and under
 /// `mpirun -np 2` and `-np 3` the same `series.csv` (with the liquid's volume and area),
 /// `bodies.csv`, `contacts.csv` and surfaces (the spheres and the free surface's zero level,
-/// rank 0's from the whole level set) byte for byte, and the snapshots' arrays bit for bit;
-/// then the two-process run restarted from its first checkpoint ends with the same files.
+/// rank 0's from the whole level set) byte for byte, with the `hdf5` feature their HDF5 form
+/// too ([`same_h5_surfaces`]), and the snapshots' arrays bit for bit; then the two-process run
+/// restarted from its first checkpoint ends with the same files.
 pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
     let scene = super::checks::POOL
         .replace("end_time: 1.0", "end_time: 0.6")
@@ -166,6 +167,15 @@ pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
             "\n    output: (every: 0.3, fields: [Velocity, Density], precision: Double, \
          checkpoint_every: 0.3),\n)",
         );
+    // With HDF5, the surfaces' HDF5 form too (the free surface's part included).
+    let scene = if cfg!(feature = "hdf5") {
+        scene.replace(
+            "checkpoint_every: 0.3)",
+            "checkpoint_every: 0.3, formats: [Vtk, Hdf5])",
+        )
+    } else {
+        scene
+    };
     let dir = scratch("pool", "pool.ron", &scene)?;
     run_in(&dir, "pool.ron", 1, "one")?;
     let files = [
@@ -180,6 +190,8 @@ pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
         let out = format!("np{np}");
         run_in(&dir, "pool.ron", np, &out)?;
         same_files(&dir, "one", &out, &files)?;
+        #[cfg(feature = "hdf5")]
+        same_h5_surfaces(&dir, "one", &out, 3)?;
         for snap in 0..3 {
             let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
                 .map_err(|e| e.to_string())?;
@@ -196,7 +208,28 @@ pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
     copy_dir(&dir.join("np2"), &dir.join("full"))?;
     restart(&dir, dir.join("np2").join(&ck))?;
     same_files(&dir, "full", "np2", &files).map_err(|e| format!("after the restart: {e}"))?;
+    #[cfg(feature = "hdf5")]
+    same_h5_surfaces(&dir, "one", "np2", 3).map_err(|e| format!("after the restart: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// The body surfaces' HDF5 form in run directories `a` and `b` (in `dir`): `bodies.xmf` byte
+/// for byte, and `snaps` files `bodies_NNNNNN.h5` (and no more) with the same datasets
+/// ([`same_h5_datasets`]).
+#[cfg(feature = "hdf5")]
+fn same_h5_surfaces(dir: &Path, a: &str, b: &str, snaps: usize) -> Result<(), String> {
+    same_files(dir, a, b, &["bodies.xmf"])?;
+    for k in 0..snaps {
+        let f = format!("bodies_{k:06}.h5");
+        same_h5_datasets(&dir.join(a).join(&f), &dir.join(b).join(&f))?;
+    }
+    for d in [a, b] {
+        let extra = dir.join(d).join(format!("bodies_{snaps:06}.h5"));
+        if extra.exists() {
+            return Err(format!("{} should not exist", extra.display()));
+        }
+    }
     Ok(())
 }
 
@@ -745,20 +778,8 @@ pub fn hdf5_bodies_match_one_process() -> Result<(), String> {
         ));
     }
     let check = |out: &str| -> Result<(), String> {
-        same_files(
-            &dir,
-            "one",
-            out,
-            &["bodies.xmf", "bodies.pvd", "bodies_000002.vtp"],
-        )?;
-        for f in &snaps {
-            same_h5_datasets(&dir.join("one").join(f), &dir.join(out).join(f))?;
-        }
-        let extra = dir.join(out).join(format!("bodies_{:06}.h5", snaps.len()));
-        if extra.exists() {
-            return Err(format!("{} should not exist", extra.display()));
-        }
-        Ok(())
+        same_files(&dir, "one", out, &["bodies.pvd", "bodies_000002.vtp"])?;
+        same_h5_surfaces(&dir, "one", out, snaps.len())
     };
     for np in [2, 3] {
         let out = format!("np{np}");
