@@ -4,6 +4,7 @@
 #[allow(dead_code)]
 mod vti;
 
+#[cfg(feature = "hdf5")]
 use std::f64::consts::{PI, TAU};
 use std::path::Path;
 use std::process::Command;
