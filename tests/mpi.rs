@@ -6,7 +6,7 @@
 //! process), each against the whole computation done on every process. Then `tumble run` itself
 //! (`tests/distributed/run.rs`): a scene run by `mpirun -np 2` and `-np 3` gives the
 //! one-process run's `series.csv` and snapshots, and with the `hdf5` feature
-//! its HDF5 snapshots and `series.h5`.
+//! its HDF5 snapshots, body surfaces and `series.h5`.
 
 #[path = "distributed/checks.rs"]
 mod checks;
@@ -300,6 +300,11 @@ fn main() {
         (
             "HDF5 snapshots under mpirun read as one process's",
             run::hdf5_matches_one_process,
+        ),
+        #[cfg(feature = "hdf5")]
+        (
+            "HDF5 body surfaces under mpirun are one process's, and restart",
+            run::hdf5_bodies_match_one_process,
         ),
     ] {
         match test() {

@@ -313,15 +313,29 @@ pub fn split_surfaces(dir: &Path, sim: &Simulation) -> Option<SurfaceSeries> {
     surface_series(dir, sim)
 }
 
-/// Writes snapshot `index` of the body surfaces of a split run (rank 0), with a free surface
-/// its zero level from `whole` (gathered by [`WholeLevelSet::gather`]); returns the file.
+/// Writes snapshot `index` of the body surfaces of a split run into `dir` (rank 0 alone, no
+/// collective call): `bodies_NNNNNN.vtp` and `bodies.pvd`, and with HDF5 output (`hdf5`,
+/// rank 0's) `bodies_NNNNNN.h5` and `bodies.xmf`, from the same surfaces and by the same
+/// code as on one process; with a free surface its zero level from `whole` (gathered by
+/// [`WholeLevelSet::gather`]); returns the files written.
 pub fn write_split_surfaces(
+    dir: &Path,
     series: &mut SurfaceSeries,
     index: usize,
     sim: &Simulation,
+    hdf5: Option<&mut SplitHdf5>,
     whole: Option<&WholeLevelSet>,
-) -> anyhow::Result<String> {
-    write_surfaces(series, index, sim, whole).map(|(file, _)| file)
+) -> anyhow::Result<Vec<String>> {
+    let (file, g) = write_surfaces(series, index, sim, whole)?;
+    #[cfg(feature = "hdf5")]
+    if let Some(h) = hdf5.and_then(|h| h.root.as_mut()) {
+        let mut written = vec![file];
+        written.extend(h.surfaces(dir, index, sim, &g)?);
+        return Ok(written);
+    }
+    #[cfg(not(feature = "hdf5"))]
+    let _ = (dir, hdf5, g);
+    Ok(vec![file])
 }
 
 /// The whole grid's liquid level set and walls' mask on rank 0 of a split run with a free
@@ -705,20 +719,8 @@ impl Hdf5Outputs {
     ) -> anyhow::Result<Vec<String>> {
         use crate::io::xdmf::XdmfEntry;
         let mut written = Vec::new();
-        if let (Some(index), Some(g)) = (self.bodies.as_mut(), surfaces) {
-            let file = format!("bodies_{k:06}.h5");
-            crate::io::hdf5_out::write_surfaces(&dir.join(&file), sim.time(), sim.steps(), g)
-                .with_context(|| format!("cannot write {file}"))?;
-            index
-                .push(crate::io::xdmf::SurfaceEntry {
-                    time: sim.time(),
-                    file: file.clone(),
-                    points: g.points.len(),
-                    cells: g.n_cells(),
-                    nodes: if g.triangles.is_empty() { 2 } else { 3 },
-                })
-                .context("cannot write bodies.xmf")?;
-            written.extend([file, "bodies.xmf".to_string()]);
+        if let Some(g) = surfaces {
+            written.extend(self.surfaces(dir, k, sim, g)?);
         }
         let file = format!("fields_{k:06}.h5");
         crate::io::hdf5_out::write_fields(
@@ -740,6 +742,34 @@ impl Hdf5Outputs {
         self.write_series(dir)?;
         written.extend([file, "fields.xmf".into(), "series.h5".into()]);
         Ok(written)
+    }
+
+    /// Snapshot `k` of the body surfaces `g` in HDF5 (a run with surfaces; nothing
+    /// otherwise): `bodies_NNNNNN.h5`, then listed in `bodies.xmf`; returns the files written.
+    /// One process's snapshots and rank 0's in a split run both write them here.
+    fn surfaces(
+        &mut self,
+        dir: &Path,
+        k: usize,
+        sim: &Simulation,
+        g: &SurfaceGeometry,
+    ) -> anyhow::Result<Vec<String>> {
+        let Some(index) = self.bodies.as_mut() else {
+            return Ok(Vec::new());
+        };
+        let file = format!("bodies_{k:06}.h5");
+        crate::io::hdf5_out::write_surfaces(&dir.join(&file), sim.time(), sim.steps(), g)
+            .with_context(|| format!("cannot write {file}"))?;
+        index
+            .push(crate::io::xdmf::SurfaceEntry {
+                time: sim.time(),
+                file: file.clone(),
+                points: g.points.len(),
+                cells: g.n_cells(),
+                nodes: if g.triangles.is_empty() { 2 } else { 3 },
+            })
+            .context("cannot write bodies.xmf")?;
+        Ok(vec![file, "bodies.xmf".to_string()])
     }
 
     /// Cut `series.h5` back to the checkpoint a restart continues from (see
@@ -882,9 +912,10 @@ pub fn write_pieces(dir: &Path, count: usize, sim: &Simulation) -> anyhow::Resul
 /// pieces ([`crate::io::hdf5_out::write_virtual_fields`]): h5py, ParaView and the HDF5 library
 /// read it as the one-process file, names, shapes and values. Rank 0 alone keeps `fields.xmf`
 /// and `series.h5`, as on one process (the time series are global, the same on every
-/// process). Nothing is gathered: each process writes only its slab. The bodies' surfaces
-/// (`bodies_NNNNNN.h5`, `bodies.xmf`) are not written on several processes, as their VTK
-/// files are not.
+/// process). Nothing is gathered: each process writes only its slab. With bodies or a free
+/// surface rank 0 also keeps `bodies.xmf` and writes `bodies_NNNNNN.h5`, from its whole copy
+/// of the bodies (and the whole level set), along with their VTK form
+/// ([`write_split_surfaces`]): the one-process files.
 pub struct SplitHdf5 {
     /// Rank 0's outputs: the index and `series.h5`.
     #[cfg(feature = "hdf5")]
@@ -900,7 +931,7 @@ impl SplitHdf5 {
         }
         #[cfg(feature = "hdf5")]
         return Some(SplitHdf5 {
-            root: root.then(|| Hdf5Outputs::new(dir, sim, false)),
+            root: root.then(|| Hdf5Outputs::new(dir, sim, has_surfaces(sim))),
         });
         #[cfg(not(feature = "hdf5"))]
         {
@@ -922,7 +953,7 @@ impl SplitHdf5 {
         #[cfg(feature = "hdf5")]
         if sim.scene().output.has_format(OutputFormat::Hdf5) {
             let root = if root {
-                Some(Hdf5Outputs::resume(dir, sim, count, false)?)
+                Some(Hdf5Outputs::resume(dir, sim, count, has_surfaces(sim))?)
             } else {
                 None
             };
@@ -933,8 +964,9 @@ impl SplitHdf5 {
     }
 
     /// Make the run directory match a resumed run of `count` snapshots: each process removes
-    /// its pieces of the later snapshots, rank 0 their files, rewrites `fields.xmf` and cuts
-    /// `series.h5` back to the checkpoint.
+    /// its pieces of the later snapshots, rank 0 their files and their body surfaces'
+    /// `bodies_NNNNNN.h5`, rewrites `fields.xmf` and `bodies.xmf` and cuts `series.h5` back
+    /// to the checkpoint.
     pub fn cut_back(&mut self, dir: &Path, count: usize, rank: usize) -> anyhow::Result<()> {
         for k in count.. {
             let piece = dir.join(format!("fields_{k:06}_{rank}.h5"));
@@ -950,6 +982,17 @@ impl SplitHdf5 {
         }
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.root.as_mut() {
+            if let Some(b) = &h.bodies {
+                for k in count.. {
+                    let f = dir.join(format!("bodies_{k:06}.h5"));
+                    if !f.is_file() {
+                        break;
+                    }
+                    std::fs::remove_file(&f)
+                        .with_context(|| format!("cannot remove {}", f.display()))?;
+                }
+                b.write().context("cannot write bodies.xmf")?;
+            }
             h.xmf.write().context("cannot write fields.xmf")?;
             h.cut_back(dir)?;
         }

@@ -18,12 +18,12 @@
 //! processes, bit for bit the same on each), so rank 0 writes `bodies.csv` and `contacts.csv` from its own copy, and with HDF5
 //! output their series in `series.h5`.
 //!
-//! Rank 0 also writes the body surfaces (`bodies_NNNNNN.vtp`, `bodies.pvd`).
+//! Rank 0 also writes the body surfaces (`bodies_NNNNNN.vtp`, `bodies.pvd`), and with HDF5
+//! output their HDF5 form (`bodies_NNNNNN.h5`, `bodies.xmf`), the one-process files
+//! ([`crate::io::snapshots::write_split_surfaces`]); a restart cuts both back to the checkpoint.
 //!
 //! With a free surface rank 0 adds its zero level to them, from the whole grid's level set that
 //! every process holds.
-//!
-//! Not yet on several processes: the body surfaces' HDF5 form (not written).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -393,9 +393,11 @@ impl Outputs {
         }
         if let Some(s) = self.surfaces.as_mut() {
             crate::io::snapshots::write_split_surfaces(
+                &self.dir,
                 s,
                 self.count,
                 sim,
+                self.hdf5.as_mut(),
                 self.level_set.as_ref(),
             )?;
         }

@@ -4,6 +4,7 @@
 #[allow(dead_code)]
 mod vti;
 
+#[cfg(feature = "hdf5")]
 use std::f64::consts::{PI, TAU};
 use std::path::Path;
 use std::process::Command;
@@ -156,8 +157,9 @@ pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
 /// to t = 0.6, with snapshots and checkpoints every 0.3: on one process and under
 /// `mpirun -np 2` and `-np 3` the same `series.csv` (with the liquid's volume and area),
 /// `bodies.csv`, `contacts.csv` and surfaces (the spheres and the free surface's zero level,
-/// rank 0's from the whole level set) byte for byte, and the snapshots' arrays bit for bit;
-/// then the two-process run restarted from its first checkpoint ends with the same files.
+/// rank 0's from the whole level set) byte for byte, with the `hdf5` feature their HDF5 form
+/// too ([`same_h5_surfaces`]), and the snapshots' arrays bit for bit; then the two-process run
+/// restarted from its first checkpoint ends with the same files.
 pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
     let scene = super::checks::POOL
         .replace("end_time: 1.0", "end_time: 0.6")
@@ -166,6 +168,15 @@ pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
             "\n    output: (every: 0.3, fields: [Velocity, Density], precision: Double, \
          checkpoint_every: 0.3),\n)",
         );
+    // With HDF5, the surfaces' HDF5 form too (the free surface's part included).
+    let scene = if cfg!(feature = "hdf5") {
+        scene.replace(
+            "checkpoint_every: 0.3)",
+            "checkpoint_every: 0.3, formats: [Vtk, Hdf5])",
+        )
+    } else {
+        scene
+    };
     let dir = scratch("pool", "pool.ron", &scene)?;
     run_in(&dir, "pool.ron", 1, "one")?;
     let files = [
@@ -180,6 +191,8 @@ pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
         let out = format!("np{np}");
         run_in(&dir, "pool.ron", np, &out)?;
         same_files(&dir, "one", &out, &files)?;
+        #[cfg(feature = "hdf5")]
+        same_h5_surfaces(&dir, "one", &out, 3)?;
         for snap in 0..3 {
             let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
                 .map_err(|e| e.to_string())?;
@@ -196,7 +209,28 @@ pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
     copy_dir(&dir.join("np2"), &dir.join("full"))?;
     restart(&dir, dir.join("np2").join(&ck))?;
     same_files(&dir, "full", "np2", &files).map_err(|e| format!("after the restart: {e}"))?;
+    #[cfg(feature = "hdf5")]
+    same_h5_surfaces(&dir, "one", "np2", 3).map_err(|e| format!("after the restart: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// The body surfaces' HDF5 form in run directories `a` and `b` (in `dir`): `bodies.xmf` byte
+/// for byte, and `snaps` files `bodies_NNNNNN.h5` (and no more) with the same datasets
+/// ([`same_h5_datasets`]).
+#[cfg(feature = "hdf5")]
+fn same_h5_surfaces(dir: &Path, a: &str, b: &str, snaps: usize) -> Result<(), String> {
+    same_files(dir, a, b, &["bodies.xmf"])?;
+    for k in 0..snaps {
+        let f = format!("bodies_{k:06}.h5");
+        same_h5_datasets(&dir.join(a).join(&f), &dir.join(b).join(&f))?;
+    }
+    for d in [a, b] {
+        let extra = dir.join(d).join(format!("bodies_{snaps:06}.h5"));
+        if extra.exists() {
+            return Err(format!("{} should not exist", extra.display()));
+        }
+    }
     Ok(())
 }
 
@@ -651,6 +685,119 @@ pub fn hdf5_matches_one_process() -> Result<(), String> {
             }
         }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// The datasets of HDF5 file `b` are those of `a`: the same names (some), and for each the
+/// same shape, type and values bit for bit; so are the root attributes `time`, `step` and
+/// `part_names` (the files themselves may differ in HDF5's object times).
+#[cfg(feature = "hdf5")]
+fn same_h5_datasets(a: &Path, b: &Path) -> Result<(), String> {
+    use hdf5::types::{TypeDescriptor, VarLenUnicode};
+    let h5 = |e: hdf5::Error| format!("{}: {e}", b.display());
+    let (x, y) = (
+        hdf5::File::open(a).map_err(|e| format!("{}: {e}", a.display()))?,
+        hdf5::File::open(b).map_err(h5)?,
+    );
+    let what = |s: String| format!("{} against {}: {s}", b.display(), a.display());
+    let names = x.member_names().map_err(h5)?;
+    if names.is_empty() || names != y.member_names().map_err(h5)? {
+        return Err(what(format!(
+            "datasets {:?} against {names:?}",
+            y.member_names()
+        )));
+    }
+    let time = |f: &hdf5::File| f.attr("time").and_then(|t| t.read_scalar::<f64>());
+    let step = |f: &hdf5::File| f.attr("step").and_then(|t| t.read_scalar::<u64>());
+    let parts = |f: &hdf5::File| {
+        f.attr("part_names")
+            .and_then(|t| t.read_raw::<VarLenUnicode>())
+            .map(|v| v.iter().map(|s| s.as_str().to_string()).collect::<Vec<_>>())
+    };
+    if time(&x).map_err(h5)?.to_bits() != time(&y).map_err(h5)?.to_bits()
+        || step(&x).map_err(h5)? != step(&y).map_err(h5)?
+        || parts(&x).map_err(h5)? != parts(&y).map_err(h5)?
+    {
+        return Err(what("the root attributes differ".into()));
+    }
+    for n in &names {
+        let (p, q) = (x.dataset(n).map_err(h5)?, y.dataset(n).map_err(h5)?);
+        let (tp, tq) = (p.dtype().map_err(h5)?, q.dtype().map_err(h5)?);
+        if p.shape() != q.shape() || tp != tq {
+            return Err(what(format!(
+                "{n}: shape {:?} against {:?}",
+                q.shape(),
+                p.shape()
+            )));
+        }
+        let same = match tp.to_descriptor().map_err(h5)? {
+            TypeDescriptor::Float(_) => {
+                let bits = |d: &hdf5::Dataset| {
+                    d.read_raw::<f64>()
+                        .map(|v| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>())
+                };
+                bits(&p).map_err(h5)? == bits(&q).map_err(h5)?
+            }
+            TypeDescriptor::Integer(_) => {
+                p.read_raw::<i64>().map_err(h5)? == q.read_raw::<i64>().map_err(h5)?
+            }
+            t => return Err(what(format!("{n}: unexpected type {t:?}"))),
+        };
+        if !same {
+            return Err(what(format!("{n}: the values differ")));
+        }
+    }
+    Ok(())
+}
+
+/// [`bodies_scene`] with HDF5 output (and no VTK) on one process and under `mpirun -np 2` and
+/// `-np 3`: rank 0 writes the body surfaces' HDF5 form, `bodies_NNNNNN.h5` with the
+/// one-process files' datasets and attributes bit for bit and `bodies.xmf` byte for byte (as
+/// are `bodies.pvd` and the `.vtp`). Then the two-process run, its third surfaces snapshot
+/// spoilt, restarted from its first checkpoint: the later snapshot is written again and
+/// `bodies.xmf` lists each snapshot once, the same files again.
+#[cfg(feature = "hdf5")]
+pub fn hdf5_bodies_match_one_process() -> Result<(), String> {
+    let scene = bodies_scene().replace(
+        "checkpoint_every: 0.06)",
+        "checkpoint_every: 0.06, formats: [Hdf5])",
+    );
+    if !scene.contains("formats: [Hdf5]") {
+        return Err("the bodies scene's output changed: no HDF5 asked for".into());
+    }
+    let dir = scratch("hdf5-bodies", "bodies.ron", &scene)?;
+    run_in(&dir, "bodies.ron", 1, "one")?;
+    let snaps: Vec<String> = (0..)
+        .map(|k| format!("bodies_{k:06}.h5"))
+        .take_while(|f| dir.join("one").join(f).is_file())
+        .collect();
+    if snaps.len() != 3 {
+        return Err(format!(
+            "one process wrote {} bodies_*.h5, not 3",
+            snaps.len()
+        ));
+    }
+    let check = |out: &str| -> Result<(), String> {
+        same_files(&dir, "one", out, &["bodies.pvd", "bodies_000002.vtp"])?;
+        same_h5_surfaces(&dir, "one", out, snaps.len())
+    };
+    for np in [2, 3] {
+        let out = format!("np{np}");
+        run_in(&dir, "bodies.ron", np, &out)?;
+        check(&out)?;
+    }
+    // The restart from the first of the two-process run's checkpoints (rank 0's file).
+    let ck = std::fs::read_dir(dir.join("np2"))
+        .map_err(|e| e.to_string())?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("checkpoint_") && n.ends_with(".bin") && !n.contains("rank"))
+        .min()
+        .ok_or("np2 wrote no checkpoint")?;
+    let last = dir.join("np2").join(&snaps[2]);
+    std::fs::write(&last, b"not a snapshot").map_err(|e| e.to_string())?;
+    restart(&dir, dir.join("np2").join(&ck))?;
+    check("np2").map_err(|e| format!("after the restart: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
 }
