@@ -71,11 +71,11 @@
 //! depend on the order of the nodes either.
 //!
 //! On several processes each holds its planes of φ_w; the redistancing reads one ghost plane a
-//! side. The extensions read φ_w at points a body's depth away along a normal, so they read the
-//! whole grid's φ_w, gathered from every process (one whole field on each, the plan of
-//! `docs/scaling.md` replaces it by a halo as wide as the deepest reach), and a moving body's
-//! level set beyond the slab's part of its patch is evaluated from its shape, as its sampling
-//! does. The results are the one-process results bit for bit.
+//! side. The extensions read φ_w at points up to a body's depth away along a normal, so they
+//! read as many ghost planes as the deepest wall or body reaches (measured at startup), or the
+//! whole grid's φ_w, gathered from every process, where that reach passes the thinnest slab. A
+//! moving body's level set beyond the slab's part of its patch is evaluated from its shape, as
+//! its sampling does. The results are the one-process results bit for bit.
 
 use crate::base::fields::Params;
 use crate::base::grid::{Grid, RowNeighbours, for_row, line_at};

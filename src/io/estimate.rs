@@ -383,12 +383,13 @@ pub fn split_estimate(scene: &ValidScene, processes: usize) -> SplitEstimate {
     let mut bytes_per_process =
         BASE_BYTES + bodies_own + local * (per_node + 8.0 * SPLIT_DOUBLES_PER_NODE);
     if scene.free_surface.is_some() {
-        // The whole grid's level set and walls' mask on every process (`free_surface`), and
-        // the momentum form's z sweep in the row layout: its d + 2 carried fields, the
+        // Rank 0's whole-grid level set and walls' mask for the snapshots' zero level (two
+        // doubles a node of the whole grid; the extensions' ghost planes are a few planes),
+        // and the momentum form's z sweep in the row layout: its d + 2 carried fields, the
         // velocity's z component and the bodies' level set, d more than the vorticity form's
         // four counted above.
         let d = g.dim as f64;
-        bytes_per_process += whole.nodes * (8.0 + 1.0) + local * 8.0 * d;
+        bytes_per_process += whole.nodes * 16.0 + local * 8.0 * d;
     }
     let kept = 1.0 / processes as f64;
     let nxh = (g.n[0] / 2 + 1) as f64;
