@@ -184,19 +184,31 @@ pub fn spectral_matches_whole(comm: Arc<Comm>, n: [usize; 3]) -> f64 {
     comm.max_one(worst)
 }
 
+/// `scene` built whole (on this process alone) and split over the processes of `comm`.
+fn whole_and_split(
+    comm: &Arc<Comm>,
+    scene: &str,
+) -> (
+    tumble::sim::engine::Simulation,
+    tumble::sim::engine::Simulation,
+) {
+    use tumble::scene::Scene;
+    use tumble::sim::engine::Simulation;
+    let parse = || Scene::parse(scene, "check.ron", "check").expect("scene parses");
+    let whole = Simulation::new(parse()).expect("whole simulation builds");
+    let split = Simulation::builder(parse())
+        .on_processes(comm.clone())
+        .build()
+        .expect("split simulation builds");
+    (whole, split)
+}
+
 /// A scene stepped on the processes of `comm` gives the same global quantities, step by step,
 /// as on one process (run whole on every process); returns the largest relative difference of
 /// energy, enstrophy, max|ω|, max|u|, the time step and the time, and of the circulation
 /// against max|ω| times the volume, over `steps` steps (over every process).
 pub fn simulation_matches_whole(comm: Arc<Comm>, scene: &str, steps: usize) -> f64 {
-    use tumble::scene::Scene;
-    use tumble::sim::engine::Simulation;
-    let parse = || Scene::parse(scene, "check.ron", "check").expect("scene parses");
-    let mut whole = Simulation::new(parse()).expect("whole simulation builds");
-    let mut split = Simulation::builder(parse())
-        .on_processes(comm.clone())
-        .build()
-        .expect("split simulation builds");
+    let (mut whole, mut split) = whole_and_split(&comm, scene);
     let rel = |a: f64, b: f64| {
         if a == b {
             0.0
@@ -467,14 +479,8 @@ pub fn multigrid_scene_matches_whole_bit_for_bit(
     scene: &str,
     steps: usize,
 ) -> f64 {
-    use tumble::scene::Scene;
     use tumble::sim::engine::Simulation;
-    let parse = || Scene::parse(scene, "check.ron", "check").expect("scene parses");
-    let mut whole = Simulation::new(parse()).expect("whole simulation builds");
-    let mut split = Simulation::builder(parse())
-        .on_processes(comm.clone())
-        .build()
-        .expect("split simulation builds");
+    let (mut whole, mut split) = whole_and_split(&comm, scene);
     let sample = |s: &Simulation| {
         let s = s.sample();
         [

@@ -51,12 +51,7 @@ pub fn run_matches_one_process() -> Result<(), String> {
         let out = format!("np{np}");
         run_in(&dir, "tg.ron", np, &out)?;
         same_files(&dir, "one", &out, &["series.csv"])?;
-        for snap in 0..3 {
-            let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
-                .map_err(|e| e.to_string())?;
-            let pieces = read_pvti(&dir.join(&out).join(format!("fields_{snap:06}.pvti")))?;
-            compare_exact(&whole, &pieces).map_err(|e| format!("{out} snapshot {snap}: {e}"))?;
-        }
+        same_snapshots(&dir, &out, 3)?;
     }
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
@@ -107,6 +102,37 @@ fn same_files(dir: &Path, a: &str, b: &str, names: &[&str]) -> Result<(), String
     Ok(())
 }
 
+/// The snapshots `0..count` of run `out` (in `dir`, in pieces) hold the arrays of the
+/// one-process run `one`'s bit for bit.
+fn same_snapshots(dir: &Path, out: &str, count: usize) -> Result<(), String> {
+    for snap in 0..count {
+        let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
+            .map_err(|e| e.to_string())?;
+        let pieces = read_pvti(&dir.join(out).join(format!("fields_{snap:06}.pvti")))?;
+        compare_exact(&whole, &pieces).map_err(|e| format!("{out} snapshot {snap}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// The first checkpoint of run `out` (in `dir`): rank 0's file.
+fn first_checkpoint(dir: &Path, out: &str) -> Result<std::path::PathBuf, String> {
+    let ck = std::fs::read_dir(dir.join(out))
+        .map_err(|e| e.to_string())?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("checkpoint_") && n.ends_with(".bin") && !n.contains("rank"))
+        .min()
+        .ok_or(format!("{out} wrote no checkpoint"))?;
+    Ok(dir.join(out).join(ck))
+}
+
+/// The two-process run `np2` (in `dir`) copied to `full`, then restarted from its first
+/// checkpoint to its end.
+fn restart_np2_from_first_checkpoint(dir: &Path) -> Result<(), String> {
+    let ck = first_checkpoint(dir, "np2")?;
+    copy_dir(&dir.join("np2"), &dir.join("full"))?;
+    restart(dir, ck)
+}
+
 /// Bodies on one process and under `mpirun -np 2` and `-np 3`: every sum over the grid is
 /// taken plane by plane in the same order whatever the split, so `series.csv`, `bodies.csv`,
 /// `contacts.csv` and the body surfaces (rank 0's) are the one-process run's byte for byte and the snapshots' arrays
@@ -132,22 +158,9 @@ pub fn bodies_match_one_process_bit_for_bit() -> Result<(), String> {
         let out = format!("np{np}");
         run_in(&dir, "bodies.ron", np, &out)?;
         same_files(&dir, "one", &out, &csvs)?;
-        for snap in 0..3 {
-            let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
-                .map_err(|e| e.to_string())?;
-            let pieces = read_pvti(&dir.join(&out).join(format!("fields_{snap:06}.pvti")))?;
-            compare_exact(&whole, &pieces).map_err(|e| format!("{out} snapshot {snap}: {e}"))?;
-        }
+        same_snapshots(&dir, &out, 3)?;
     }
-    // The restart from the first of the two-process run's checkpoints (rank 0's file).
-    let ck = std::fs::read_dir(dir.join("np2"))
-        .map_err(|e| e.to_string())?
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("checkpoint_") && n.ends_with(".bin") && !n.contains("rank"))
-        .min()
-        .ok_or("np2 wrote no checkpoint")?;
-    copy_dir(&dir.join("np2"), &dir.join("full"))?;
-    restart(&dir, dir.join("np2").join(&ck))?;
+    restart_np2_from_first_checkpoint(&dir)?;
     same_files(&dir, "full", "np2", &csvs).map_err(|e| format!("after the restart: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
@@ -193,21 +206,9 @@ pub fn free_surface_matches_one_process_bit_for_bit() -> Result<(), String> {
         same_files(&dir, "one", &out, &files)?;
         #[cfg(feature = "hdf5")]
         same_h5_surfaces(&dir, "one", &out, 3)?;
-        for snap in 0..3 {
-            let whole = vti::read_vti(&dir.join(format!("one/fields_{snap:06}.vti")))
-                .map_err(|e| e.to_string())?;
-            let pieces = read_pvti(&dir.join(&out).join(format!("fields_{snap:06}.pvti")))?;
-            compare_exact(&whole, &pieces).map_err(|e| format!("{out} snapshot {snap}: {e}"))?;
-        }
+        same_snapshots(&dir, &out, 3)?;
     }
-    let ck = std::fs::read_dir(dir.join("np2"))
-        .map_err(|e| e.to_string())?
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("checkpoint_") && n.ends_with(".bin") && !n.contains("rank"))
-        .min()
-        .ok_or("np2 wrote no checkpoint")?;
-    copy_dir(&dir.join("np2"), &dir.join("full"))?;
-    restart(&dir, dir.join("np2").join(&ck))?;
+    restart_np2_from_first_checkpoint(&dir)?;
     same_files(&dir, "full", "np2", &files).map_err(|e| format!("after the restart: {e}"))?;
     #[cfg(feature = "hdf5")]
     same_h5_surfaces(&dir, "one", "np2", 3).map_err(|e| format!("after the restart: {e}"))?;
@@ -787,16 +788,11 @@ pub fn hdf5_bodies_match_one_process() -> Result<(), String> {
         run_in(&dir, "bodies.ron", np, &out)?;
         check(&out)?;
     }
-    // The restart from the first of the two-process run's checkpoints (rank 0's file).
-    let ck = std::fs::read_dir(dir.join("np2"))
-        .map_err(|e| e.to_string())?
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("checkpoint_") && n.ends_with(".bin") && !n.contains("rank"))
-        .min()
-        .ok_or("np2 wrote no checkpoint")?;
+    // The restart from the first of the two-process run's checkpoints.
+    let ck = first_checkpoint(&dir, "np2")?;
     let last = dir.join("np2").join(&snaps[2]);
     std::fs::write(&last, b"not a snapshot").map_err(|e| e.to_string())?;
-    restart(&dir, dir.join("np2").join(&ck))?;
+    restart(&dir, ck)?;
     check("np2").map_err(|e| format!("after the restart: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
