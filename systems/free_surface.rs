@@ -148,9 +148,10 @@ struct SplitLevelSet {
 enum Far {
     /// Before the startup has measured the reach.
     Unset,
-    /// `w` ghost planes a side: the deepest reach of the walls' and the bodies' extensions,
-    /// measured at startup (a wall's points are fixed; a rigid body's depth is its own).
-    Planes(Halo, usize),
+    /// Ghost planes a side as many as the deepest reach of the walls' and the bodies'
+    /// extensions, measured at startup (a wall's points are fixed; a rigid body's depth is its
+    /// own).
+    Planes(Halo),
     /// The whole grid's φ_w, gathered from every process: where that reach is wider than the
     /// thinnest slab.
     Whole(Gather, Vec<f64>),
@@ -168,10 +169,9 @@ struct View<'a> {
 
 #[derive(Clone, Copy)]
 enum FarView<'a> {
-    /// One process: `phi` is the whole grid.
-    Local,
-    Planes(&'a Halo, usize),
+    /// The whole grid's φ_w: `phi` itself on one process, else the gathered copy.
     Whole(&'a [f64]),
+    Planes(&'a Halo),
 }
 
 impl View<'_> {
@@ -181,10 +181,9 @@ impl View<'_> {
         let g = self.grid;
         let nzw = g.nz_whole as isize;
         match self.far {
-            FarView::Local => self.phi[g.idx(i, j, k.rem_euclid(nzw) as usize)],
-            FarView::Whole(w) => w[i + g.n[0] * (j + g.n[1] * k.rem_euclid(nzw) as usize)],
-            FarView::Planes(h, w) => {
-                let (w, nz) = (w as isize, g.n[2] as isize);
+            FarView::Whole(w) => w[g.idx(i, j, k.rem_euclid(nzw) as usize)],
+            FarView::Planes(h) => {
+                let (w, nz) = (h.width() as isize, g.n[2] as isize);
                 let mut kl = k - g.k0 as isize;
                 if kl < -w || kl >= nz + w {
                     kl = (kl + w).rem_euclid(nzw) - w;
@@ -193,15 +192,9 @@ impl View<'_> {
                     kl >= -w && kl < nz + w,
                     "free surface: plane {k} beyond the reach"
                 );
-                plane(g, self.phi, Some(h), 0, kl)[i + g.n[0] * j]
+                plane(g, self.phi, Some(h), 0, kl)[g.idx(i, j, 0)]
             }
         }
-    }
-
-    /// φ_w at the slab's node `c`.
-    #[inline]
-    fn local(&self, c: usize) -> f64 {
-        self.phi[c]
     }
 }
 
@@ -234,10 +227,10 @@ impl FreeSurfaceScratch {
     /// with its planes beyond the slab filled (every process calls it together).
     fn view<'a>(split: &'a mut Option<SplitLevelSet>, grid: &'a Grid, phi: &'a [f64]) -> View<'a> {
         let far = match split.as_mut().map(|s| &mut s.far) {
-            None => FarView::Local,
-            Some(Far::Planes(h, w)) => {
+            None => FarView::Whole(phi),
+            Some(Far::Planes(h)) => {
                 h.fill_one(0, phi);
-                FarView::Planes(h, *w)
+                FarView::Planes(h)
             }
             Some(Far::Whole(g, whole)) => {
                 g.whole(phi, whole);
@@ -273,7 +266,7 @@ impl FreeSurfaceScratch {
             .min()
             .unwrap_or(0);
         s.far = if reach <= thinnest {
-            Far::Planes(Halo::new(grid, &s.d, reach, 1), reach)
+            Far::Planes(Halo::new(grid, &s.d, reach, 1))
         } else {
             Far::Whole(
                 Gather::new(&s.d, grid.plane()),
@@ -355,25 +348,13 @@ impl FreeSurfaceScratch {
                     let mut g = [0.0; 3];
                     let mut down = [0.0; 3];
                     for a in 0..grid.dim {
-                        let (m, q) = match a {
-                            0 => (
-                                grid.idx(wrap(i, -1, nx), j, k),
-                                grid.idx(wrap(i, 1, nx), j, k),
-                            ),
-                            1 => (
-                                grid.idx(i, wrap(j, -1, ny), k),
-                                grid.idx(i, wrap(j, 1, ny), k),
-                            ),
-                            _ => (usize::MAX, usize::MAX),
+                        // φ_s one node away along a (along z from the halo on a slab).
+                        let at = |d: isize| match a {
+                            0 => phi_s[grid.idx(wrap(i, d, nx), j, k)],
+                            1 => phi_s[grid.idx(i, wrap(j, d, ny), k)],
+                            _ => plane(grid, phi_s, halo, 0, k as isize + d)[grid.idx(i, j, 0)],
                         };
-                        let (pm, pq) = if a == 2 {
-                            let at =
-                                |d: isize| plane(grid, phi_s, halo, 0, k as isize + d)[i + nx * j];
-                            (at(-1), at(1))
-                        } else {
-                            (phi_s[m], phi_s[q])
-                        };
-                        let (pm, pq) = (pm.max(p - h), pq.max(p - h));
+                        let (pm, pq) = (at(-1).max(p - h), at(1).max(p - h));
                         g[a] = -(pq - pm) / (2.0 * h);
                         // The steeper one-sided descent, for a ridge (the middle of a wall
                         // across the periodic seam, where the centred difference vanishes).
@@ -490,13 +471,11 @@ fn outward_normal(grid: &Grid, body: MovingBody, q: [usize; 3], p: f64) -> Optio
         let mut idx = q.map(|v| v as isize);
         let n = dims[ax] as isize;
         idx[ax] += d;
-        let v = idx[ax];
-        if (v < 0 || v >= n) && dims[ax] == grid.n[ax] && ax < 2 {
-            idx[ax] = v.rem_euclid(n);
-        }
-        let whole_z = dims[2] == grid.nz_whole && !grid.is_slab();
-        if ax == 2 && whole_z && (v < 0 || v >= n) {
-            idx[2] = v.rem_euclid(n);
+        // A patch spanning the grid wraps (along z on a slab, `MovingBody::phi` wraps the
+        // whole box).
+        let spans = dims[ax] == grid.n[ax] && (ax < 2 || !grid.is_slab());
+        if spans {
+            idx[ax] = idx[ax].rem_euclid(n);
         }
         body.phi(grid, idx).unwrap_or(p - h).max(p - h)
     };
@@ -547,7 +526,7 @@ fn extension_values(grid: &Grid, body: MovingBody, view: &View, next: &mut [f64]
             let Some(n) = outward_normal(grid, body, [a, b, c], p) else {
                 // No direction out of the body here: the node's own value.
                 // SAFETY: distinct patch nodes map to distinct grid nodes.
-                unsafe { out.write(g, view.local(g)) };
+                unsafe { out.write(g, view.phi[g]) };
                 continue;
             };
             let s = (p + h) / h;

@@ -108,8 +108,6 @@ pub struct PressureSolver {
     potential_partial: Vec<f64>,
     /// The sums of those partials over the whole grid.
     potential_sums: RowSums,
-    /// On several processes: the split (for the extremes of the phase density).
-    split: Option<Decomposition>,
     /// On several processes: one ghost plane a side of three fields, for the differences
     /// along z.
     halo: Option<Halo>,
@@ -145,7 +143,6 @@ impl PressureSolver {
                 Vec::new()
             },
             potential_sums: RowSums::new(grid, split),
-            split: split.cloned(),
         }
     }
 
@@ -216,6 +213,7 @@ pub fn pressure(
     mut spectral: ResMut<Spectral>,
     mut sums: ResMut<BodySums>,
     bodies: Query<(&Body, &GridPatch, &RigidState)>,
+    split: Option<Res<Decomposition>>,
 ) {
     let (solver, bf, state) = (&mut *solver, &mut *bf, &mut *state);
     let dt = time.dt;
@@ -247,7 +245,8 @@ pub fn pressure(
     );
     if momentum {
         gravity.reduced = Some(1.0 / grid.h);
-        reduced_potential(&grid, &bodies, &bf.rho_phase, params.gravity, solver);
+        let split = split.as_deref();
+        reduced_potential(&grid, &bodies, &bf.rho_phase, params.gravity, split, solver);
         // The whole velocity is projected: it is carried, not made divergence-free by a
         // velocity solve.
         for (s, u) in solver.src.iter_mut().zip(&fields.u) {
@@ -289,6 +288,7 @@ fn reduced_potential(
     bodies: &Query<(&Body, &GridPatch, &RigidState)>,
     phase: &[f64],
     g: [f64; 3],
+    split: Option<&Decomposition>,
     solver: &mut PressureSolver,
 ) {
     let (nx, ny) = (grid.n[0], grid.n[1]);
@@ -302,7 +302,6 @@ fn reduced_potential(
             || (f64::INFINITY, f64::NEG_INFINITY),
             |(a, b), (c, d)| (a.min(c), b.max(d)),
         );
-    let split = solver.split.as_ref();
     let (lo, hi) = (-global_max(split, -lo), global_max(split, hi));
     let gx = |row: usize, i: usize| {
         let x = grid.pos(i, row % ny, row / ny);

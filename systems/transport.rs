@@ -118,33 +118,61 @@ pub struct TransportScratch {
 /// row layout ([`Transpose`]), where each line is one process's and the sweep is the one-process
 /// code unchanged: the particles of a line then move and remesh exactly as on one process.
 struct SplitScratch {
-    d: Decomposition,
     /// Per velocity component, the R planes below the slab then the R planes above it (the
     /// neighbours').
     u_ghost: Halo,
-    transpose: Transpose,
     /// The vorticity's components and the velocity's z component in the row layout.
+    lines: ZLines,
+}
+
+/// Whole lines along z of a slab's fields: the row layout of the FFTs' transposes
+/// ([`Transpose`]), where this process holds some y rows with every z, and the grid of it.
+struct ZLines {
+    d: Decomposition,
+    transpose: Transpose,
+    /// The fields in the row layout.
     rows: Vec<Vec<f64>>,
     /// The transpose's scratch.
     packed: Vec<f64>,
     /// The grid of the row layout: this process's y rows, every z.
-    rows_grid: Grid,
+    grid: Grid,
 }
 
-impl SplitScratch {
-    fn new(grid: &Grid, d: &Decomposition) -> Self {
+impl ZLines {
+    /// Room for `fields` fields of the slab `grid` of `d`'s.
+    fn new(grid: &Grid, d: &Decomposition, fields: usize) -> Self {
         let transpose = Transpose::new(&d.slabs, grid.n[0]);
         let rows = d.slabs.my_rows();
         let whole = grid.whole();
         let mut origin = whole.origin;
         origin[1] += rows.start as f64 * grid.h;
-        SplitScratch {
+        ZLines {
             d: d.clone(),
-            u_ghost: Halo::new(grid, d, R, 3),
-            rows: vec![vec![0.0; transpose.rows_len()]; 4],
+            rows: vec![vec![0.0; transpose.rows_len()]; fields],
             packed: vec![0.0; transpose.slab_len()],
             transpose,
-            rows_grid: Grid::new([grid.n[0], rows.len(), whole.n[2]], grid.h, origin),
+            grid: Grid::new([grid.n[0], rows.len(), whole.n[2]], grid.h, origin),
+        }
+    }
+
+    /// The slab's field `f` into row-layout field `c` (every process together).
+    fn forward(&mut self, c: usize, f: &[f64]) {
+        self.transpose
+            .forward(&self.d.comm, f, &mut self.packed, &mut self.rows[c]);
+    }
+
+    /// Row-layout field `c` back into the slab's field `f` (every process together).
+    fn backward(&mut self, c: usize, f: &mut [f64]) {
+        self.transpose
+            .backward(&self.d.comm, &self.rows[c], &mut self.packed, f);
+    }
+}
+
+impl SplitScratch {
+    fn new(grid: &Grid, d: &Decomposition) -> Self {
+        SplitScratch {
+            u_ghost: Halo::new(grid, d, R, 3),
+            lines: ZLines::new(grid, d, 4),
         }
     }
 
@@ -160,17 +188,15 @@ impl SplitScratch {
         kernel: crate::base::params::RemeshKernel,
         pool: &LinePool,
     ) {
-        let comm = &*self.d.comm;
+        let zl = &mut self.lines;
         let nc = omega.len();
         for (c, w) in omega.iter().enumerate() {
-            self.transpose
-                .forward(comm, w, &mut self.packed, &mut self.rows[c]);
+            zl.forward(c, w);
         }
-        self.transpose
-            .forward(comm, uz, &mut self.packed, &mut self.rows[3]);
-        let (w_rows, u_rows) = self.rows.split_at_mut(nc);
+        zl.forward(3, uz);
+        let (w_rows, u_rows) = zl.rows.split_at_mut(nc);
         sweep(
-            &self.rows_grid,
+            &zl.grid,
             2,
             dt,
             w_rows,
@@ -180,8 +206,7 @@ impl SplitScratch {
             pool,
         );
         for (c, w) in omega.iter_mut().enumerate() {
-            self.transpose
-                .backward(comm, &self.rows[c], &mut self.packed, w);
+            zl.backward(c, w);
         }
     }
 }
@@ -282,13 +307,9 @@ pub struct MomentumScratch {
 /// vorticity form's, [`SplitScratch`]), and one ghost plane a side of the carried fields and
 /// of Σχ for the reset's neighbours.
 struct MomentumSplit {
-    d: Decomposition,
-    transpose: Transpose,
     /// The carried fields, the velocity's z component and the bodies' level set in the row
     /// layout.
-    rows: Vec<Vec<f64>>,
-    packed: Vec<f64>,
-    rows_grid: Grid,
+    lines: ZLines,
     /// Ghost planes of ρ̃, q̃ (dim components), φ̃_w and Σχ, in that order.
     halo: Halo,
 }
@@ -301,20 +322,9 @@ impl MomentumScratch {
         MomentumScratch {
             carried: vec![vec![0.0; grid.len()]; nf],
             pool: CarryPool::per_thread(move || CarryScratch::new(nmax, nf)),
-            split: split.map(|d| {
-                let transpose = Transpose::new(&d.slabs, grid.n[0]);
-                let rows = d.slabs.my_rows();
-                let whole = grid.whole();
-                let mut origin = whole.origin;
-                origin[1] += rows.start as f64 * grid.h;
-                MomentumSplit {
-                    d: d.clone(),
-                    rows: vec![vec![0.0; transpose.rows_len()]; nf + 2],
-                    packed: vec![0.0; transpose.slab_len()],
-                    transpose,
-                    rows_grid: Grid::new([grid.n[0], rows.len(), whole.n[2]], grid.h, origin),
-                    halo: Halo::new(grid, d, 1, nf + 1),
-                }
+            split: split.map(|d| MomentumSplit {
+                lines: ZLines::new(grid, d, nf + 2),
+                halo: Halo::new(grid, d, 1, nf + 1),
             }),
         }
     }
@@ -333,33 +343,20 @@ impl MomentumSplit {
         near: Near,
         pool: &CarryPool,
     ) {
-        let comm = &*self.d.comm;
+        let zl = &mut self.lines;
         let nf = carried.len();
         for (c, f) in carried.iter().enumerate() {
-            self.transpose
-                .forward(comm, f, &mut self.packed, &mut self.rows[c]);
+            zl.forward(c, f);
         }
-        self.transpose
-            .forward(comm, uz, &mut self.packed, &mut self.rows[nf]);
+        zl.forward(nf, uz);
         if !solid.is_empty() {
-            self.transpose
-                .forward(comm, solid, &mut self.packed, &mut self.rows[nf + 1]);
+            zl.forward(nf + 1, solid);
         }
-        let (f_rows, rest) = self.rows.split_at_mut(nf);
+        let (f_rows, rest) = zl.rows.split_at_mut(nf);
         let solid_rows: &[f64] = if solid.is_empty() { &[] } else { &rest[1] };
-        carry_sweep(
-            &self.rows_grid,
-            2,
-            dt,
-            f_rows,
-            &rest[0],
-            solid_rows,
-            near,
-            pool,
-        );
+        carry_sweep(&zl.grid, 2, dt, f_rows, &rest[0], solid_rows, near, pool);
         for (c, f) in carried.iter_mut().enumerate() {
-            self.transpose
-                .backward(comm, &self.rows[c], &mut self.packed, f);
+            zl.backward(c, f);
         }
     }
 }
@@ -435,7 +432,7 @@ pub fn momentum_transport(
     // into substeps that move no particle more than SUBSTEP_CELLS cells.
     let split = scratch.split.as_mut();
     let umax = global_max(
-        split.as_ref().map(|s| &s.d),
+        split.as_ref().map(|s| &s.lines.d),
         crate::solvers::max_norm(&fields.u),
     );
     let cells = umax * dt / grid.h;
@@ -520,11 +517,7 @@ fn donor_reset(
     // Row `j` of the plane `dk` from row `row`'s, of carried field `f` (Σχ for `ch`).
     let line = |f: usize, row: usize, j: usize, dk: isize| {
         let field: &[f64] = if f == ch { chi } else { &carried[f] };
-        let k = row / ny;
-        if dim == 2 {
-            return &field[j * nx..(j + 1) * nx];
-        }
-        crate::parallel::halo::z_line(grid, field, halo, f, j + ny * k, dk)
+        crate::parallel::halo::z_line(grid, field, halo, f, j + ny * (row / ny), dk)
     };
     let up = crate::base::grid::component_ptrs(u);
     let kr: &[isize] = if dim == 3 { &[-1, 0, 1] } else { &[0] };

@@ -339,18 +339,19 @@ pub fn write_split_surfaces(
 }
 
 /// The whole grid's liquid level set and walls' mask on rank 0 of a split run with a free
-/// surface, for the zero level in the body surfaces: every process sends its planes at each
-/// snapshot (rank 0 alone holds the whole grid's).
+/// surface, for the zero level in the body surfaces: every process sends its planes of the
+/// level set at each snapshot, and of the (static) walls' mask once (rank 0 alone holds the
+/// whole grid's).
 pub struct WholeLevelSet {
     gather: crate::parallel::Gather,
     phi: Vec<f64>,
+    /// 1 inside a wall, 0 elsewhere (empty without walls).
     in_wall: Vec<f64>,
-    /// This process's walls' mask as values (scratch).
-    mine: Vec<f64>,
 }
 
 impl WholeLevelSet {
-    /// For a split run of `sim` with a free surface (`None` otherwise).
+    /// For a split run of `sim` with a free surface (`None` otherwise), with the walls' mask
+    /// gathered (every process together).
     pub fn new(sim: &Simulation) -> Option<Self> {
         let d = sim.world.get_resource::<crate::parallel::Decomposition>()?;
         sim.world.get_resource::<LiquidLevelSet>()?;
@@ -360,29 +361,32 @@ impl WholeLevelSet {
         } else {
             0
         };
+        let gather = crate::parallel::Gather::new(d, grid.plane());
+        let walls = sim
+            .world
+            .get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
+        let mine: Vec<f64> = walls
+            .map_or(&[][..], |w| w.in_wall())
+            .iter()
+            .map(|&w| w as u8 as f64)
+            .collect();
+        // Every process has walls or none (the same static bodies).
+        let mut in_wall = Vec::new();
+        if !mine.is_empty() {
+            in_wall.resize(whole, 0.0);
+            gather.to_root(&mine, &mut in_wall);
+        }
         Some(WholeLevelSet {
-            gather: crate::parallel::Gather::new(d, grid.plane()),
+            gather,
             phi: vec![0.0; whole],
-            in_wall: vec![0.0; whole],
-            mine: Vec::new(),
+            in_wall,
         })
     }
 
-    /// Gathers the level set and the walls' mask now onto rank 0 (every process together).
+    /// Gathers the level set now onto rank 0 (every process together).
     pub fn gather(&mut self, sim: &Simulation) {
-        let world = &sim.world;
-        if let Some(l) = world.get_resource::<LiquidLevelSet>() {
+        if let Some(l) = sim.world.get_resource::<LiquidLevelSet>() {
             self.gather.to_root(&l.phi, &mut self.phi);
-        }
-        let walls = world.get_resource::<crate::systems::free_surface::FreeSurfaceScratch>();
-        let in_wall = walls.map_or(&[][..], |w| w.in_wall());
-        // Every process has walls or none (the same static bodies).
-        if !in_wall.is_empty() {
-            self.mine.clear();
-            self.mine.extend(in_wall.iter().map(|&w| w as u8 as f64));
-            self.gather.to_root(&self.mine, &mut self.in_wall);
-        } else {
-            self.in_wall.clear();
         }
     }
 }

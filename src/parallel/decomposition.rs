@@ -44,19 +44,30 @@ pub struct Gather {
 }
 
 impl Gather {
-    /// The gather of fields of `plane` nodes a z-plane over `d`'s slabs.
+    /// The gather of fields of `plane` values a z-plane over `d`'s slabs.
     pub fn new(d: &Decomposition, plane: usize) -> Self {
         let ranks = d.slabs.ranks;
-        let counts = (0..ranks)
-            .map(|r| crate::parallel::comm::count(d.slabs.planes(r).len() * plane))
+        let bounds: Vec<usize> = (0..ranks)
+            .map(|r| d.slabs.planes(r).start)
+            .chain([d.slabs.n[2]])
             .collect();
-        let displ = (0..ranks)
-            .map(|r| crate::parallel::comm::count(d.slabs.planes(r).start * plane))
-            .collect();
+        Gather::of_planes(d, plane, &bounds)
+    }
+
+    /// The gather of fields of `plane` values a plane, rank `r` holding the planes
+    /// `bounds[r]..bounds[r + 1]` (a coarse level of a hierarchy, split its own way).
+    pub fn of_planes(d: &Decomposition, plane: usize, bounds: &[usize]) -> Self {
+        let count = crate::parallel::comm::count;
         Gather {
             d: d.clone(),
-            counts,
-            displ,
+            counts: bounds
+                .windows(2)
+                .map(|b| count(plane * (b[1] - b[0])))
+                .collect(),
+            displ: bounds[..d.slabs.ranks]
+                .iter()
+                .map(|&a| count(plane * a))
+                .collect(),
         }
     }
 

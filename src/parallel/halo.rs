@@ -55,6 +55,11 @@ impl Halo {
             .exchange(&self.d.slabs, first, last, below, above);
     }
 
+    /// Planes a side.
+    pub fn width(&self) -> usize {
+        self.w
+    }
+
     /// The ghosts of every component: per component, `w` planes below, then `w` above.
     pub fn all(&self) -> &[Vec<f64>] {
         &self.ghosts

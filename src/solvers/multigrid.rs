@@ -54,8 +54,7 @@
 //!   that of one process.
 
 use crate::base::grid::{Grid, RowNeighbours, SyncPtr, periodic_neighbours};
-use crate::parallel::comm::count;
-use crate::parallel::{Decomposition, Slabs};
+use crate::parallel::{Decomposition, Gather, Slabs};
 use rayon::prelude::*;
 
 /// A level with at most this many nodes is the coarsest.
@@ -118,12 +117,10 @@ struct Split {
     d: Decomposition,
     /// The first level held whole (gathered).
     whole: usize,
-    /// Per rank, the values (one per node) of level `whole` it holds, and where they start.
-    counts: Vec<i32>,
-    displs: Vec<i32>,
-    /// The same in weights' values (four per node).
-    counts4: Vec<i32>,
-    displs4: Vec<i32>,
+    /// The gather of level `whole` from the processes' planes of it: of values (one per node)
+    /// and of weights (four per node).
+    gather: Gather,
+    gather4: Gather,
     /// This process's nodes of level `whole`.
     mine: std::ops::Range<usize>,
     /// Level `whole`'s right-hand side and correction, whole.
@@ -330,13 +327,7 @@ impl Multigrid {
             levels.push(level(n, f, grid.h, None, 0..n[2] / f[2]));
         }
         let (n, bounds) = (plan[split_at].0, &bounds[split_at]);
-        let (ranks, plane) = (d.slabs.ranks, n[0] * n[1]);
-        let counts: Vec<i32> = bounds
-            .windows(2)
-            .map(|b| count(plane * (b[1] - b[0])))
-            .collect();
-        let displs: Vec<i32> = bounds[..ranks].iter().map(|&a| count(plane * a)).collect();
-        let four = |v: &[i32]| v.iter().map(|&c| 4 * c).collect::<Vec<i32>>();
+        let plane = n[0] * n[1];
         let mine = plane * bounds[rank]..plane * bounds[rank + 1];
         let len: usize = n.iter().product();
         Multigrid {
@@ -344,10 +335,8 @@ impl Multigrid {
             split: Some(Split {
                 d: d.clone(),
                 whole: split_at,
-                counts4: four(&counts),
-                displs4: four(&displs),
-                counts,
-                displs,
+                gather: Gather::of_planes(d, plane, bounds),
+                gather4: Gather::of_planes(d, 4 * plane, bounds),
                 w_mine: vec![[0.0; 4]; mine.len()],
                 mine,
                 b: vec![0.0; len],
@@ -381,8 +370,7 @@ impl Multigrid {
             // Level 0 is held whole: gather β.
             let l0 = &mut self.levels[0];
             for (a, b) in beta.iter().enumerate() {
-                sp.d.comm
-                    .all_gather_varcount(b, &mut sp.x, &sp.counts, &sp.displs);
+                sp.gather.whole(b, &mut sp.x);
                 l0.w.par_iter_mut()
                     .zip(sp.x.par_iter())
                     .for_each(|(o, v)| o[a] = *v);
@@ -408,12 +396,8 @@ impl Multigrid {
                         // The last distributed level's coarsening gives this process's planes
                         // of the first whole level: gather them.
                         coarsen(fine, &mut sp.w_mine);
-                        sp.d.comm.all_gather_varcount(
-                            sp.w_mine.as_flattened(),
-                            lv.w.as_flattened_mut(),
-                            &sp.counts4,
-                            &sp.displs4,
-                        );
+                        sp.gather4
+                            .whole(sp.w_mine.as_flattened(), lv.w.as_flattened_mut());
                     }
                     _ => coarsen(fine, &mut lv.w),
                 }
@@ -435,8 +419,7 @@ impl Multigrid {
         match self.split.as_mut() {
             None => cycle(&mut self.levels, z, r),
             Some(sp) if sp.whole == 0 => {
-                sp.d.comm
-                    .all_gather_varcount(r, &mut sp.b, &sp.counts, &sp.displs);
+                sp.gather.whole(r, &mut sp.b);
                 cycle(&mut self.levels, &mut sp.x, &sp.b);
                 z.copy_from_slice(&sp.x[sp.mine.clone()]);
             }
@@ -992,8 +975,7 @@ fn split_cycle(levels: &mut [Level], dist: usize, sp: &mut Split, x: &mut [f64],
     if dist > 1 {
         split_cycle(rest, dist - 1, sp, &mut lv.coarse_x, &lv.coarse_b);
     } else {
-        sp.d.comm
-            .all_gather_varcount(&lv.coarse_b, &mut sp.b, &sp.counts, &sp.displs);
+        sp.gather.whole(&lv.coarse_b, &mut sp.b);
         cycle(rest, &mut sp.x, &sp.b);
         lv.coarse_x.copy_from_slice(&sp.x[sp.mine.clone()]);
     }
